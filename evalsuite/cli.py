@@ -1,0 +1,68 @@
+"""The ``evalsuite`` command.
+
+Subcommands live beside the code they drive and are imported only when used, so
+``evalsuite --help`` stays fast and optional extras (torch, flask, pyrender) are never
+imported by commands that do not need them.
+"""
+from __future__ import annotations
+
+import importlib
+
+import click
+
+from evalsuite import __version__
+from evalsuite.errors import InputError
+
+# name -> "module:attribute"; the attribute is a click command or group.
+COMMANDS = {
+    "info": "evalsuite.motion.cli:info",
+    "convert": "evalsuite.motion.cli:convert",
+    "demo": "evalsuite.demo:demo",
+    "score": "evalsuite.metrics.cli:score",
+    "fgd": "evalsuite.learned.cli:fgd",
+    "render": "renderers.cli:render",
+    "study": "study_app.cli:study",
+    "analyze": "evalsuite.analysis.cli:analyze",
+}
+
+
+class LazyGroup(click.Group):
+    """A click group whose subcommands are imported on first use."""
+
+    def list_commands(self, ctx):
+        return sorted(set(super().list_commands(ctx)) | set(self._available()))
+
+    def _available(self):
+        # Only list commands whose module exists in this checkout/installation.
+        names = []
+        for name, target in COMMANDS.items():
+            module = target.split(":")[0]
+            if importlib.util.find_spec(module) is not None:
+                names.append(name)
+        return names
+
+    def get_command(self, ctx, name):
+        cmd = super().get_command(ctx, name)
+        if cmd is not None or name not in COMMANDS:
+            return cmd
+        module_name, attr = COMMANDS[name].split(":")
+        if importlib.util.find_spec(module_name) is None:
+            return None
+        return getattr(importlib.import_module(module_name), attr)
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except InputError as exc:
+            # Bad input is the user's to fix: a clear message, no traceback, exit 1.
+            raise click.ClickException(str(exc)) from exc
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="evalsuite")
+def main():
+    """evalsuite: evaluate speech-driven gesture generation.
+
+    Score generated motion against natural motion, render comparison videos, host
+    crowd studies and analyse their results. Run `evalsuite COMMAND --help` for details.
+    """
