@@ -7,6 +7,7 @@ imported by commands that do not need them.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 
 import click
 
@@ -26,6 +27,13 @@ COMMANDS = {
 }
 
 
+def _module_exists(name: str) -> bool:
+    try:
+        return importlib.util.find_spec(name) is not None
+    except ModuleNotFoundError:  # a parent package is missing
+        return False
+
+
 class LazyGroup(click.Group):
     """A click group whose subcommands are imported on first use."""
 
@@ -34,19 +42,14 @@ class LazyGroup(click.Group):
 
     def _available(self):
         # Only list commands whose module exists in this checkout/installation.
-        names = []
-        for name, target in COMMANDS.items():
-            module = target.split(":")[0]
-            if importlib.util.find_spec(module) is not None:
-                names.append(name)
-        return names
+        return [name for name, target in COMMANDS.items() if _module_exists(target.split(":")[0])]
 
     def get_command(self, ctx, name):
         cmd = super().get_command(ctx, name)
         if cmd is not None or name not in COMMANDS:
             return cmd
         module_name, attr = COMMANDS[name].split(":")
-        if importlib.util.find_spec(module_name) is None:
+        if not _module_exists(module_name):
             return None
         return getattr(importlib.import_module(module_name), attr)
 

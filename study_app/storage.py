@@ -1,0 +1,437 @@
+"""Storage of plans, sessions, answers and interaction logs (SQLAlchemy 2.x).
+
+SQLite (WAL journal, ``synchronous=FULL``, every transaction ``BEGIN IMMEDIATE``) by default,
+PostgreSQL by URL. Guarantees:
+
+* an answer is committed before the server acknowledges it;
+* ``answers.submit_token`` is UNIQUE and ``(session_id, page_index)`` is UNIQUE: a retried or
+  double-clicked submission returns the first acknowledgement and creates nothing; a
+  different answer for an already answered page is refused, never written over it;
+* one session per participant per study (UNIQUE ``(study, participant)``);
+* plans are handed out with a reservation that expires and is re-released.
+"""
+from __future__ import annotations
+
+import datetime as dt
+import json
+import secrets
+import time
+
+from sqlalchemy import (JSON, Boolean, DateTime, Float, ForeignKey, Integer, String, Text,
+                        UniqueConstraint, create_engine, event, func, select, update)
+from sqlalchemy.exc import IntegrityError, OperationalError
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
+
+from study_app.design import plans_digest
+from study_app.errors import StudyStateError
+
+
+def utcnow() -> dt.datetime:
+    return dt.datetime.now(dt.timezone.utc).replace(tzinfo=None)
+
+
+class Base(DeclarativeBase):
+    pass
+
+
+class StudyRecord(Base):
+    __tablename__ = "studies"
+    id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    plans_sha256: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class Plan(Base):
+    __tablename__ = "plans"
+    __table_args__ = (UniqueConstraint("study", "key"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    study: Mapped[str] = mapped_column(String(64), index=True)
+    key: Mapped[str] = mapped_column(String(64))
+    position: Mapped[int] = mapped_column(Integer)
+    pages: Mapped[list] = mapped_column(JSON)
+    status: Mapped[str] = mapped_column(String(16), default="free", index=True)  # free/reserved/used
+    session_id: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    reserved_until: Mapped[dt.datetime | None] = mapped_column(DateTime, nullable=True)
+    times_released: Mapped[int] = mapped_column(Integer, default=0)
+
+
+class ParticipantSession(Base):
+    __tablename__ = "sessions"
+    __table_args__ = (UniqueConstraint("study", "participant"),)
+    id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    study: Mapped[str] = mapped_column(String(64), index=True)
+    participant: Mapped[str] = mapped_column(String(128))
+    platform: Mapped[str] = mapped_column(String(16))
+    platform_data: Mapped[dict] = mapped_column(JSON, default=dict)
+    plan_id: Mapped[int | None] = mapped_column(ForeignKey("plans.id"), nullable=True)
+    status: Mapped[str] = mapped_column(String(16), default="active")  # active/finished/failed/expired
+    end_reason: Mapped[str] = mapped_column(String(32), default="")
+    current_page: Mapped[int] = mapped_column(Integer, default=0)
+    failed_checks: Mapped[int] = mapped_column(Integer, default=0)
+    passed_checks: Mapped[int] = mapped_column(Integer, default=0)
+    honeypot: Mapped[bool] = mapped_column(Boolean, default=False)
+    user_agent: Mapped[str] = mapped_column(Text, default="")
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+    updated_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+    finished_at: Mapped[dt.datetime | None] = mapped_column(DateTime, nullable=True)
+
+
+class Answer(Base):
+    __tablename__ = "answers"
+    __table_args__ = (UniqueConstraint("session_id", "page_index"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    submit_token: Mapped[str] = mapped_column(String(64), unique=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
+    page_index: Mapped[int] = mapped_column(Integer)
+    page_id: Mapped[str] = mapped_column(String(128))
+    data: Mapped[dict] = mapped_column(JSON)
+    attention_passed: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
+    shown_at: Mapped[dt.datetime] = mapped_column(DateTime)
+    answered_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+    rt_ms: Mapped[int] = mapped_column(Integer)
+    client_rt_ms: Mapped[int | None] = mapped_column(Integer, nullable=True)
+
+
+class PageView(Base):
+    """First time a page was shown (response times) and the autosaved draft of its answer."""
+    __tablename__ = "page_views"
+    __table_args__ = (UniqueConstraint("session_id", "page_index"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
+    page_index: Mapped[int] = mapped_column(Integer)
+    shown_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+    draft: Mapped[dict | None] = mapped_column(JSON, nullable=True)
+    draft_at: Mapped[dt.datetime | None] = mapped_column(DateTime, nullable=True)
+
+
+class Event(Base):
+    """Interaction log: play/pause/seek/ended/choice events with media and client times."""
+    __tablename__ = "events"
+    __table_args__ = (UniqueConstraint("session_id", "client_id"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
+    client_id: Mapped[str] = mapped_column(String(64))
+    page_index: Mapped[int] = mapped_column(Integer)
+    kind: Mapped[str] = mapped_column(String(16))
+    slot: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    media_time: Mapped[float | None] = mapped_column(Float, nullable=True)
+    client_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    detail: Mapped[str] = mapped_column(String(200), default="")
+    server_time: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+# ------------------------------------------------------------------------------- engine
+
+def make_engine(url: str):
+    """Engine for ``url``; SQLite gets WAL, full fsync, a busy timeout and BEGIN IMMEDIATE."""
+    if url.startswith("sqlite"):
+        engine = create_engine(url, connect_args={"timeout": 60, "check_same_thread": False})
+
+        @event.listens_for(engine, "connect")
+        def _sqlite_connect(dbapi_conn, _record):
+            # Let SQLAlchemy's "begin" hook start transactions (pysqlite's own BEGIN is deferred,
+            # which turns read-then-write transactions into SQLITE_BUSY under concurrency).
+            dbapi_conn.isolation_level = None
+            cur = dbapi_conn.cursor()
+            cur.execute("PRAGMA journal_mode=WAL")
+            cur.execute("PRAGMA synchronous=FULL")
+            cur.execute("PRAGMA busy_timeout=60000")
+            cur.execute("PRAGMA foreign_keys=ON")
+            cur.close()
+
+        @event.listens_for(engine, "begin")
+        def _sqlite_begin(conn):
+            conn.exec_driver_sql("BEGIN IMMEDIATE")
+    else:
+        engine = create_engine(url, pool_pre_ping=True, pool_size=5, max_overflow=10)
+    return engine
+
+
+def init_db(engine, study, plans: dict):
+    """Create tables (if missing) and store the study's plans once.
+
+    Refuses a database whose plans for this study differ from ``plans`` (changing plans in
+    the middle of a study would break the balance and the meaning of stored answers).
+    """
+    for attempt in range(5):
+        try:
+            Base.metadata.create_all(engine)
+            break
+        except (OperationalError, IntegrityError):
+            # Several workers starting at once may race on CREATE TABLE; the loser retries.
+            time.sleep(0.2 * (attempt + 1))
+    digest = plans_digest(plans)
+    Session = sessionmaker(engine)
+    for attempt in range(5):
+        try:
+            with Session.begin() as db:
+                rec = db.get(StudyRecord, study.id)
+                if rec is not None:
+                    if rec.plans_sha256 != digest:
+                        raise StudyStateError(
+                            f"the database already holds different session plans for study "
+                            f"{study.id!r}; use a new database or a new study id", field="plans")
+                    return
+                db.add(StudyRecord(id=study.id, plans_sha256=digest))
+                for i, plan in enumerate(plans["plans"]):
+                    db.add(Plan(study=study.id, key=plan["key"], position=i, pages=plan["pages"]))
+            return
+        except IntegrityError:
+            time.sleep(0.2 * (attempt + 1))
+
+
+class Store:
+    """All database operations of the app; each method is one transaction."""
+
+    def __init__(self, engine):
+        self.engine = engine
+        self.Session = sessionmaker(engine, expire_on_commit=False)
+        self.is_postgres = engine.dialect.name == "postgresql"
+
+    def _locked(self, stmt):
+        return stmt.with_for_update() if self.is_postgres else stmt
+
+    # --- sessions and plan reservations -------------------------------------------------
+
+    def release_expired(self, db, study_id: str, now: dt.datetime):
+        """Expire sessions whose reservation ran out and free their plans."""
+        expired = db.scalars(self._locked(select(Plan).where(
+            Plan.study == study_id, Plan.status == "reserved", Plan.reserved_until < now))).all()
+        for plan in expired:
+            sess = db.get(ParticipantSession, plan.session_id) if plan.session_id else None
+            if sess is not None and sess.status == "active":
+                sess.status, sess.end_reason, sess.updated_at = "expired", "reservation_expired", now
+            plan.status, plan.session_id, plan.reserved_until = "free", None, None
+            plan.times_released += 1
+
+    def find_session(self, study_id: str, participant: str):
+        with self.Session() as db:
+            return db.scalars(select(ParticipantSession).where(
+                ParticipantSession.study == study_id,
+                ParticipantSession.participant == participant)).first()
+
+    def get_session(self, session_id: str):
+        with self.Session() as db:
+            return db.get(ParticipantSession, session_id)
+
+    def start_session(self, study, participant: str, platform: str, platform_data: dict,
+                      user_agent: str):
+        """Create a session and reserve a plan for it.
+
+        Returns ``(session, created)``; when the participant already has a session for this
+        study it is returned unchanged (``created`` False) so the caller resumes or refuses.
+        Returns ``(None, False)`` when no plan is free.
+        """
+        now = utcnow()
+        until = now + dt.timedelta(minutes=study.reservation_minutes)
+        for attempt in range(3):
+            try:
+                with self.Session.begin() as db:
+                    existing = db.scalars(select(ParticipantSession).where(
+                        ParticipantSession.study == study.id,
+                        ParticipantSession.participant == participant)).first()
+                    if existing is not None:
+                        self._check_expiry(db, existing, now)
+                        return existing, False
+                    self.release_expired(db, study.id, now)
+                    stmt = (select(Plan).where(Plan.study == study.id, Plan.status == "free")
+                            .order_by(Plan.position).limit(1))
+                    if self.is_postgres:
+                        stmt = stmt.with_for_update(skip_locked=True)
+                    plan = db.scalars(stmt).first()
+                    if plan is None:
+                        return None, False
+                    sess = ParticipantSession(
+                        id=secrets.token_urlsafe(18), study=study.id, participant=participant,
+                        platform=platform, platform_data=platform_data, plan_id=plan.id,
+                        user_agent=user_agent[:1000], created_at=now, updated_at=now)
+                    db.add(sess)
+                    db.flush()
+                    plan.status, plan.session_id, plan.reserved_until = "reserved", sess.id, until
+                return sess, True
+            except IntegrityError:
+                # Same participant entering twice at the same moment: the other request won.
+                continue
+        raise RuntimeError("could not start a session")
+
+    def _check_expiry(self, db, sess, now):
+        if sess.status != "active":
+            return
+        plan = db.get(Plan, sess.plan_id)
+        if plan is not None and plan.status == "reserved" and plan.reserved_until < now:
+            self.release_expired(db, sess.study, now)
+
+    def load(self, session_id: str):
+        """(session, plan pages, answers by page index) for a participant's session."""
+        now = utcnow()
+        with self.Session.begin() as db:
+            sess = db.get(ParticipantSession, session_id)
+            if sess is None:
+                return None, None, {}
+            self._check_expiry(db, sess, now)
+            plan = db.get(Plan, sess.plan_id)
+            answers = {a.page_index: a for a in db.scalars(
+                select(Answer).where(Answer.session_id == session_id))}
+            return sess, plan.pages, answers
+
+    def page_view(self, session_id: str, page_index: int):
+        """Record the first time a page is shown; return its row (with the autosaved draft)."""
+        with self.Session.begin() as db:
+            view = db.scalars(select(PageView).where(PageView.session_id == session_id,
+                                                     PageView.page_index == page_index)).first()
+            if view is None:
+                view = PageView(session_id=session_id, page_index=page_index, shown_at=utcnow())
+                db.add(view)
+            return view
+
+    def save_draft(self, session_id: str, page_index: int, draft: dict) -> bool:
+        with self.Session.begin() as db:
+            sess = db.get(ParticipantSession, session_id)
+            if sess is None or sess.status != "active" or sess.current_page != page_index:
+                return False
+            view = db.scalars(select(PageView).where(PageView.session_id == session_id,
+                                                     PageView.page_index == page_index)).first()
+            if view is None:
+                view = PageView(session_id=session_id, page_index=page_index, shown_at=utcnow())
+                db.add(view)
+            view.draft, view.draft_at = draft, utcnow()
+            return True
+
+    def add_events(self, db, session_id: str, page_index: int, events: list[dict]):
+        if not events:
+            return
+        ids = [e["id"] for e in events]
+        known = set(db.scalars(select(Event.client_id).where(Event.session_id == session_id,
+                                                             Event.client_id.in_(ids))))
+        for e in events:
+            if e["id"] in known:
+                continue  # a retried batch: the log keeps one copy of each event
+            known.add(e["id"])
+            db.add(Event(session_id=session_id, client_id=e["id"], page_index=page_index,
+                         kind=e["kind"], slot=e.get("slot"), media_time=e.get("t"),
+                         client_ms=e.get("ms"), detail=e.get("detail", "")))
+
+    def log_events(self, session_id: str, page_index: int, events: list[dict]):
+        for attempt in range(3):
+            try:
+                with self.Session.begin() as db:
+                    self.add_events(db, session_id, page_index, events)
+                return
+            except IntegrityError:
+                continue
+
+    def slots_with(self, db, session_id: str, page_index: int, kind: str) -> set[int]:
+        return set(db.scalars(select(Event.slot).where(
+            Event.session_id == session_id, Event.page_index == page_index,
+            Event.kind == kind)))
+
+    def submit(self, session_id: str, page_index: int, token: str, evaluate):
+        """Store the answer to page ``page_index`` once, idempotently.
+
+        ``evaluate(db, sess, pages)`` validates and returns ``(data, attention_passed,
+        events)`` or raises. Returns ``(status, answer, session)`` with status ``"stored"``,
+        ``"duplicate"`` (same token seen before: the first answer is returned), or
+        ``"conflict"`` (this page already has a different answer / is not the current page).
+        """
+        for attempt in range(3):
+            try:
+                with self.Session.begin() as db:
+                    # Lock the session first, then look for the token: a concurrent retry that
+                    # waited for the lock then sees the committed first answer.
+                    sess = db.scalars(self._locked(select(ParticipantSession).where(
+                        ParticipantSession.id == session_id))).first()
+                    prior = db.scalars(select(Answer).where(Answer.submit_token == token)).first()
+                    if prior is not None:
+                        if prior.session_id != session_id or prior.page_index != page_index:
+                            return "conflict", None, sess
+                        return "duplicate", prior, sess
+                    now = utcnow()
+                    self._check_expiry(db, sess, now)
+                    if sess.status != "active" or sess.current_page != page_index:
+                        return "conflict", None, sess
+                    plan = db.get(Plan, sess.plan_id)
+                    data, passed, events = evaluate(db, sess, plan.pages)
+                    self.add_events(db, session_id, page_index, events)
+                    view = db.scalars(select(PageView).where(PageView.session_id == session_id,
+                                                             PageView.page_index == page_index)).first()
+                    shown = view.shown_at if view else now
+                    client_rt = data.pop("_client_rt_ms", None)
+                    answer = Answer(submit_token=token, session_id=session_id, page_index=page_index,
+                                    page_id=plan.pages[page_index]["page"], data=data,
+                                    attention_passed=passed, shown_at=shown, answered_at=now,
+                                    rt_ms=max(0, int((now - shown).total_seconds() * 1000)),
+                                    client_rt_ms=client_rt)
+                    db.add(answer)
+                    sess.current_page = page_index + 1
+                    sess.updated_at = now
+                    if passed is True:
+                        sess.passed_checks += 1
+                    elif passed is False:
+                        sess.failed_checks += 1
+                    self._advance(db, sess, plan, now, data)
+                    # Sliding reservation: an active participant keeps their plan.
+                    if sess.status == "active":
+                        plan.reserved_until = now + dt.timedelta(minutes=self._reservation_minutes)
+                return "stored", answer, sess
+            except IntegrityError:
+                # A concurrent duplicate (same token, or same page) won the race: re-read.
+                continue
+        raise RuntimeError("could not store the answer")
+
+    _reservation_minutes = 100.0
+    _max_failed = 2
+    _release_failed = True
+
+    def configure(self, study):
+        self._reservation_minutes = study.reservation_minutes
+        self._max_failed = study.max_failed_attention_checks
+        self._release_failed = study.release_failed
+
+    def _advance(self, db, sess, plan, now, data):
+        pages = plan.pages
+        if data.get("honeypot"):
+            sess.honeypot = True
+            self._end(sess, plan, "failed", "honeypot", now)
+        elif sess.failed_checks >= self._max_failed:
+            self._end(sess, plan, "failed", "attention_checks", now)
+        elif pages[sess.current_page]["type"] == "finish":
+            self._end(sess, plan, "finished", "completed", now)
+
+    def _end(self, sess, plan, status, reason, now):
+        sess.status, sess.end_reason, sess.finished_at = status, reason, now
+        if status == "finished" or not self._release_failed:
+            plan.status, plan.reserved_until = "used", None
+        else:
+            # A failed participant's data is excluded, so their plan goes to someone else.
+            plan.status, plan.session_id, plan.reserved_until = "free", None, None
+            plan.times_released += 1
+
+    # --- admin / export -------------------------------------------------------------------
+
+    def dump(self, study_id: str) -> dict:
+        with self.Session() as db:
+            sessions = db.scalars(select(ParticipantSession).where(
+                ParticipantSession.study == study_id).order_by(ParticipantSession.created_at)).all()
+            ids = [s.id for s in sessions]
+            plans = {p.id: p for p in db.scalars(select(Plan).where(Plan.study == study_id))}
+            answers = db.scalars(select(Answer).where(Answer.session_id.in_(ids))
+                                 .order_by(Answer.session_id, Answer.page_index)).all() if ids else []
+            events = db.scalars(select(Event).where(Event.session_id.in_(ids))
+                                .order_by(Event.id)).all() if ids else []
+            return {"sessions": sessions, "plans": plans, "answers": answers, "events": events}
+
+    def progress(self, study_id: str) -> dict:
+        with self.Session() as db:
+            status_counts = dict(db.execute(select(ParticipantSession.status, func.count())
+                                            .where(ParticipantSession.study == study_id)
+                                            .group_by(ParticipantSession.status)).all())
+            plan_counts = dict(db.execute(select(Plan.status, func.count())
+                                          .where(Plan.study == study_id).group_by(Plan.status)).all())
+            n_answers = db.scalar(select(func.count()).select_from(Answer).join(
+                ParticipantSession, Answer.session_id == ParticipantSession.id).where(
+                ParticipantSession.study == study_id))
+            return {"sessions": status_counts, "plans": plan_counts, "answers": n_answers}
+
+
+def to_json(obj) -> str:
+    return json.dumps(obj, sort_keys=True, default=str)
