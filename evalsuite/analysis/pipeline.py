@@ -1,0 +1,258 @@
+"""``analyze``: read, exclude, test, and write every table, figure and the HTML report."""
+from __future__ import annotations
+
+import html
+import json
+import pathlib
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from evalsuite.analysis import blind as blinding
+from evalsuite.analysis import report
+from evalsuite.analysis.exclusions import apply_exclusions
+from evalsuite.analysis.io import read_any
+from evalsuite.analysis.likert import likert_tables
+from evalsuite.analysis.pairwise import mismatch_tables, orient, pairwise_table
+from evalsuite.analysis.ranking import elo_table
+from evalsuite.analysis.ratings import rating_summary, significance_matrix, wilcoxon_pairs
+
+
+@dataclass
+class AnalysisOptions:
+    """Every choice that changes a number in the outputs (all shown in the report)."""
+
+    tie_policy: str = "exclude"
+    ci_method: str = "clopper-pearson"
+    holm_scope: str = "study"
+    alpha: float = 0.05
+    attention_fails: int = 2
+    keep_incomplete: bool = False
+    duplicates: str = "keep-first"
+    mushra_screening: bool = True
+    zero_method: str = "wilcox"
+    n_boot: int = 1000
+    seed: int = 42
+    mismatch_suffix: str = "_mismatched"
+    mismatch_tie_policy: str = "split"
+    study: str | None = None
+    figures: bool = True
+
+
+@dataclass
+class AnalysisResult:
+    out_dir: pathlib.Path
+    tables: dict = field(default_factory=dict)
+    figures: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    exclusions: object = None
+    blinded: bool = False
+    key_path: pathlib.Path | None = None
+    report_path: pathlib.Path | None = None
+
+
+def _notes(table: pd.DataFrame, what: str, keys) -> list[str]:
+    if table is None or table.empty or "note" not in table.columns:
+        return []
+    out = []
+    for _, r in table[table["note"].astype(str) != ""].iterrows():
+        out.append(f"{what} {' / '.join(str(r[k]) for k in keys)}: {r['note']}")
+    return out
+
+
+def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: bool = False,
+            reveal: bool = False, echo=print) -> AnalysisResult:
+    """Analyse a results.csv or battles CSV into ``out_dir`` (see docs/analysis.md)."""
+    opt = options or AnalysisOptions()
+    out_dir = pathlib.Path(out_dir)
+    raw = read_any(path, study=opt.study)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    salt, reveal_salt = blinding.resolve(out_dir, blind, reveal)
+    names = blinding.all_conditions(raw)
+    res = AnalysisResult(out_dir=out_dir, blinded=salt is not None)
+    if salt is not None:
+        raw = blinding.apply_codes(raw, blinding.blind_codes(names, salt, opt.mismatch_suffix))
+        echo("Blind analysis: condition names are replaced by codes (B01, ...); run with --reveal to unblind.")
+
+    excl = apply_exclusions(raw, attention_fails=opt.attention_fails, keep_incomplete=opt.keep_incomplete,
+                            duplicates=opt.duplicates, mushra_screening=opt.mushra_screening)
+    res.exclusions = excl
+    data = excl.data
+    s = excl.summary
+    echo(f"Participants: {s['participants_total']} ({s['sessions_total']} sessions); "
+         f"excluded sessions: {s['sessions_excluded']}; analysed: {s['sessions_included']} sessions, "
+         f"{s['rows_analysed']} judgements")
+    T = res.tables
+    T["exclusions"] = excl.table
+
+    # The design = every judgement row of the file (any session), so a comparison emptied
+    # by the exclusions is still listed, with a note instead of a p-value.
+    design = raw[(raw["is_training"] == 0) & (raw["is_attention_check"] == 0)]
+    pw_design = design[design["page_type"] == "pairwise"]
+    pw = data[data["page_type"] == "pairwise"]
+    if not pw_design.empty:
+        comps = orient(pw_design)[["question", "condition_a", "condition_b"]].drop_duplicates()
+        T["pairwise"] = pairwise_table(pw, tie_policy=opt.tie_policy, ci_method=opt.ci_method,
+                                       holm_scope=opt.holm_scope, alpha=opt.alpha,
+                                       comparisons=comps.itertuples(index=False, name=None))
+        res.notes += _notes(T["pairwise"], "pairwise", ["question", "condition_a", "condition_b"])
+        per, between = mismatch_tables(T["pairwise"], suffix=opt.mismatch_suffix,
+                                       tie_policy=opt.mismatch_tie_policy, alpha=opt.alpha)
+        if not per.empty:
+            T["mismatch"] = per
+            res.notes += _notes(per, "matched/mismatched", ["question", "condition"])
+        if not between.empty:
+            T["mismatch_barnard"] = between
+            res.notes += _notes(between, "Barnard", ["question", "condition_1", "condition_2"])
+        if not pw.empty:
+            T["elo"] = elo_table(pw, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha)
+            res.notes += _notes(T["elo"].drop_duplicates(["question", "note"]), "ranking", ["question"])
+    mu_design = design[design["page_type"] == "mushra"]
+    mu = data[data["page_type"] == "mushra"]
+    if not mu_design.empty:
+        T["ratings"] = rating_summary(mu, opt.alpha)
+        missing = sorted(set(zip(mu_design["question"], mu_design["condition"]))
+                         - set(zip(T["ratings"]["question"], T["ratings"]["condition"])))
+        for q, c in missing:
+            res.notes.append(f"ratings {q} / {c}: no ratings left after exclusions")
+        res.notes += _notes(T["ratings"], "ratings", ["question", "condition"])
+        T["ratings_pairwise"] = wilcoxon_pairs(mu, zero_method=opt.zero_method, holm_scope=opt.holm_scope,
+                                               alpha=opt.alpha)
+        res.notes += _notes(T["ratings_pairwise"], "Wilcoxon", ["question", "condition_1", "condition_2"])
+    lk = data[data["page_type"] == "likert"]
+    if not design[design["page_type"] == "likert"].empty:
+        if lk.empty:
+            res.notes.append("likert: no responses left after exclusions")
+        else:
+            for name, t in likert_tables(lk, opt.alpha).items():
+                T[f"likert_{name}"] = t
+            res.notes += _notes(T["likert_reliability"], "Cronbach's alpha", ["scale"])
+            res.notes += _notes(T["likert_anova"], "ANOVA", ["scale", "test"])
+    if data.empty:
+        res.notes.append("no judgements left after exclusions: nothing to test")
+
+    for note in res.notes:
+        echo(f"note: {note}")
+    for name, table in T.items():
+        report.write_table(table, out_dir, name)
+
+    sections = _figures_and_sections(res, opt, data, out_dir, raw, path)
+    title = f"evalsuite analysis: {raw.attrs.get('study', '')}"
+    res.report_path = out_dir / "report.html"
+    res.report_path.write_text(report.html_report(title, sections), encoding="utf-8")
+    summary = {"input": str(path), "study": raw.attrs.get("study"), "format": raw.attrs.get("format"),
+               "blinded": res.blinded, "options": asdict(opt),
+               "exclusions": {k: v for k, v in excl.summary.items()}, "notes": res.notes}
+    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
+    if reveal_salt is not None:
+        res.key_path = blinding.finish_reveal(out_dir, reveal_salt, names, opt.mismatch_suffix)
+        echo(f"Revealed: code -> condition key in {res.key_path}")
+    elif reveal:
+        echo("--reveal: this folder was not blinded; outputs use the real condition names.")
+    echo(f"Report: {res.report_path}")
+    return res
+
+
+def _figures_and_sections(res, opt, data, out_dir, raw, path):
+    T = res.tables
+    fig_dir = out_dir / "figures"
+    fig_dir.mkdir(exist_ok=True)
+    figs = res.figures
+
+    def add(fig, name, caption):
+        p = report.save_figure(fig, fig_dir / f"{name}.png")
+        figs.append((p, caption))
+        return report.html_figure(p, caption)
+
+    s = res.exclusions.summary
+    settings = pd.DataFrame([
+        ("input", f"{pathlib.Path(path).name} ({raw.attrs.get('format')})"),
+        ("study", raw.attrs.get("study")),
+        ("tie policy (pairwise)", opt.tie_policy),
+        ("tie policy (matched/mismatched)", opt.mismatch_tie_policy),
+        ("preference CI", f"{opt.ci_method}, {100 * (1 - opt.alpha):g}%"),
+        ("multiple comparisons", f"Holm-Bonferroni per {opt.holm_scope}, alpha = {opt.alpha:g}"),
+        ("Wilcoxon zero differences", opt.zero_method),
+        ("attention checks", "exclude on any failure" if opt.attention_fails == 1
+         else f"exclude at >= {opt.attention_fails} failures"),
+        ("BS.1534-3 post-screening", "on" if opt.mushra_screening else "off"),
+        ("bootstrap", f"{opt.n_boot} participant resamples, seed {opt.seed}"),
+    ], columns=["setting", "value"])
+    head = []
+    if res.blinded:
+        head.append('<p class="blind">BLIND ANALYSIS: condition names are replaced by codes. '
+                    "Run <code>evalsuite analyze ... --reveal</code> to unblind.</p>")
+    head.append(report.html_table(settings))
+    sections = [("Settings", head)]
+
+    ex = [f"<p>{s['participants_total']} participants in {s['sessions_total']} sessions; "
+          f"{s['sessions_excluded']} sessions excluded, {s['sessions_included']} analysed "
+          f"({s['participants_included']} participants, {s['rows_analysed']} judgements). "
+          f"Removed rows: {s['training_rows_removed']} training, "
+          f"{s['attention_check_rows_removed']} attention-check trials.</p>"]
+    if s["reasons"]:
+        ex.append(report.html_table(pd.DataFrame(sorted(s["reasons"].items()), columns=["reason", "sessions"])))
+    ex.append(report.html_table(T["exclusions"]) if not T["exclusions"].empty else "<p>Nobody was excluded.</p>")
+    sections.append(("Exclusions", ex))
+    if res.notes:
+        sections.append(("Notes", ['<div class="note"><ul>' + "".join(
+            f"<li>{html.escape(n)}</li>" for n in res.notes) + "</ul></div>"]))
+
+    if "pairwise" in T:
+        parts = [report.html_table(T["pairwise"])]
+        if opt.figures:
+            for q in sorted(T["pairwise"]["question"].unique()):
+                parts.append(add(report.fig_preferences(T["pairwise"], q, opt.tie_policy),
+                                 f"preference_{_safe(q)}", f"Pairwise preference with 95% CIs: {q}"))
+        sections.append(("Pairwise preferences", parts))
+    if "mismatch" in T:
+        parts = [report.html_table(T["mismatch"])]
+        if "mismatch_barnard" in T:
+            parts.append("<p>Barnard's exact test between conditions (Holm-corrected):</p>")
+            parts.append(report.html_table(T["mismatch_barnard"]))
+        if opt.figures:
+            for q, sub in T["mismatch"].groupby("question"):
+                parts.append(add(report.fig_bars_ci(sub, "condition", "pref_matched",
+                                                    f"Matched preferred: {q}", "share preferring matched "
+                                                    f"(ties {opt.mismatch_tie_policy}, Clopper-Pearson 95% CI)",
+                                                    ref=0.5, xlim=(0, 1)),
+                                 f"mismatch_{_safe(q)}", f"Matched vs mismatched: {q}"))
+        sections.append(("Matched vs mismatched", parts))
+    if "elo" in T:
+        parts = [report.html_table(T["elo"])]
+        if opt.figures:
+            for q in sorted(T["elo"]["question"].unique()):
+                if np.isfinite(T["elo"].loc[T["elo"]["question"] == q, "elo"].astype(float)).any():
+                    parts.append(add(report.fig_elo(T["elo"], q), f"elo_{_safe(q)}", f"Elo with 95% CIs: {q}"))
+        sections.append(("Ranking (Bradley-Terry / Elo)", parts))
+    if "ratings" in T:
+        parts = [report.html_table(T["ratings"]), "<p>Pairwise Wilcoxon signed-rank tests:</p>",
+                 report.html_table(T["ratings_pairwise"])]
+        mu = data[data["page_type"] == "mushra"]
+        if opt.figures:
+            for q in sorted(mu["question"].unique()):
+                parts.append(add(report.fig_ratings(mu, q), f"ratings_{_safe(q)}", f"Ratings: {q}"))
+                conds = T["ratings"].loc[T["ratings"]["question"] == q].sort_values(
+                    "median", ascending=False)["condition"].tolist()
+                m = significance_matrix(T["ratings_pairwise"], q, conds)
+                m.to_csv(out_dir / f"significance_{_safe(q)}.csv")
+                parts.append(add(report.fig_significance(m, q), f"significance_{_safe(q)}",
+                                 f"Significance matrix: {q}"))
+        sections.append(("Ratings (0-100)", parts))
+    if "likert_means" in T:
+        parts = ["<p>Reliability:</p>", report.html_table(T["likert_reliability"]),
+                 "<p>Means:</p>", report.html_table(T["likert_means"]),
+                 "<p>ANOVA:</p>", report.html_table(T["likert_anova"]),
+                 "<p>Post-hoc tests (Bonferroni):</p>", report.html_table(T["likert_posthoc"])]
+        if opt.figures:
+            for sc, sub in T["likert_means"].groupby("scale"):
+                parts.append(add(report.fig_bars_ci(sub, "condition", "mean", f"Likert: {sc}",
+                                                    "mean scale score (95% CI)"),
+                                 f"likert_{_safe(sc)}", f"Likert means: {sc}"))
+        sections.append(("Likert scales", parts))
+    return sections
+
+
+def _safe(name: str) -> str:
+    return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(name))

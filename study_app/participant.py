@@ -1,0 +1,280 @@
+"""Participant blueprint: entry from a crowd platform, pages, answers, autosave, events.
+
+A participant's browser holds the ids of its own sessions in the signed session cookie;
+every ``/s/<sid>/...`` request for a session not in that list is refused (403). Page HTML
+and JSON carry slot numbers and labels only: conditions and file names stay on the server.
+"""
+from __future__ import annotations
+
+import re
+import secrets
+import urllib.parse
+
+from flask import (Blueprint, abort, current_app, jsonify, redirect, render_template, request,
+                   session, url_for)
+
+from study_app.answers import (PayloadError, n_slots, parse_answer, parse_events, parse_token,
+                               score_attention)
+from study_app.definition import PAIRWISE_ANSWERS, PAIRWISE_LABELS
+
+bp = Blueprint("participant", __name__)
+
+PARAM_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+MOBILE_RE = re.compile(r"Mobi|Android|iPhone|iPad|iPod|Tablet|Silk|Kindle", re.I)
+MTURK_PREVIEW = "ASSIGNMENT_ID_NOT_AVAILABLE"
+MTURK_SUBMIT_HOSTS = ("www.mturk.com", "workersandbox.mturk.com")
+
+
+def _study():
+    return current_app.extensions["study"]
+
+
+def _store():
+    return current_app.extensions["store"]
+
+
+def _message(title, message, code=200, **extra):
+    return render_template("message.html", title=title, message=message, **extra), code
+
+
+def _own(sid: str):
+    """Refuse any session this browser did not start (or resume via its platform id)."""
+    if not isinstance(sid, str) or sid not in session.get("sids", []):
+        abort(403)
+
+
+def _remember(sid: str):
+    sids = [s for s in session.get("sids", []) if s != sid][-9:]
+    session["sids"] = sids + [sid]
+    session.permanent = True
+
+
+@bp.route("/")
+def index():
+    return _message(_study().title, "Please open this study with the link you were given.")
+
+
+@bp.route("/start/<study_id>")
+def start(study_id):
+    study = _study()
+    if study_id != study.id:
+        abort(404)
+    args = request.args
+    ua = request.headers.get("User-Agent", "")
+    if study.block_mobile and MOBILE_RE.search(ua):
+        return _message("Please use a computer",
+                        "This study needs a desktop or laptop computer with a large screen. "
+                        "Please return to it from a computer.", 403)
+    platform_data = {}
+    if study.platform == "prolific":
+        names = ("PROLIFIC_PID", "STUDY_ID", "SESSION_ID")
+        values = {n: args.get(n, "") for n in names}
+        bad = [n for n in names if not PARAM_RE.match(values[n])]
+        if bad:
+            return _message("Link incomplete", "Please open this study from Prolific (the link lacks "
+                            f"a valid {bad[0]}).", 400)
+        if study.prolific_study_id and values["STUDY_ID"] != study.prolific_study_id:
+            return _message("Wrong study", "This link belongs to another Prolific study.", 400)
+        participant, platform_data = values["PROLIFIC_PID"], values
+    elif study.platform == "mturk":
+        assignment = args.get("assignmentId", "")
+        if assignment == MTURK_PREVIEW:
+            return render_template("preview.html", study=study)
+        names = ("workerId", "assignmentId", "hitId")
+        values = {n: args.get(n, "") for n in names}
+        bad = [n for n in names if not PARAM_RE.match(values[n])]
+        submit_to = args.get("turkSubmitTo", "")
+        parsed = urllib.parse.urlparse(submit_to)
+        if bad or parsed.scheme != "https" or parsed.hostname not in MTURK_SUBMIT_HOSTS:
+            what = bad[0] if bad else "turkSubmitTo"
+            return _message("Link incomplete", f"Please open this HIT from MTurk (invalid {what}).", 400)
+        values["turkSubmitTo"] = f"https://{parsed.hostname}"
+        participant, platform_data = values["workerId"], values
+    else:
+        participant = session.get(f"anon_{study.id}")
+        if not participant:
+            participant = "anon-" + secrets.token_hex(8)
+            session[f"anon_{study.id}"] = participant
+            session.permanent = True
+    sess, created = _store().start_session(study, participant, study.platform, platform_data, ua)
+    if sess is None:
+        return _message("Study full", "All places in this study are taken at the moment. Please "
+                        "return the task and try again later.", 503)
+    if not created:
+        if sess.status == "finished":
+            return _message("Already completed", "You have already completed this study. You can "
+                            "take part only once.", 409)
+        if sess.status == "failed":
+            return _message("Cannot continue", "You cannot take part in this study anymore.", 409)
+        if sess.status == "expired":
+            return _message("Time expired", "Your place in this study has expired and the study "
+                            "cannot be started again.", 409)
+        if not study.resume:
+            return _message("Already started", "You have already started this study; it cannot be "
+                            "started again.", 409)
+    _remember(sess.id)
+    return redirect(url_for("participant.page", sid=sess.id))
+
+
+@bp.route("/s/<sid>/")
+def page(sid):
+    _own(sid)
+    study, store = _study(), _store()
+    sess, pages, answers = store.load(sid)
+    if sess is None:
+        abort(404)
+    if sess.status != "active":
+        return _ended(sess)
+    index = sess.current_page
+    spec = pages[index]
+    view = store.page_view(sid, index)
+    done = {}
+    with store.Session() as db:
+        for kind in ("play", "ended"):
+            done[kind] = sorted(store.slots_with(db, sid, index, kind))
+    data = _page_data(study, spec, index, len(pages), sid)
+    data.update(draft=view.draft or {}, played=done["play"], ended=done["ended"])
+    return render_template("page.html", study=study, spec=spec, data=data, page=_page_cfg(study, spec),
+                           index=index, total=len(pages))
+
+
+def _page_cfg(study, spec):
+    return study.page(spec.get("block") or spec["page"]).cfg
+
+
+def _page_data(study, spec, index, total, sid) -> dict:
+    """What the browser needs for one page: never a condition or file name."""
+    data = {"type": spec["type"], "index": index, "total": total,
+            "answer_url": url_for("participant.answer", sid=sid, index=index),
+            "draft_url": url_for("participant.draft", sid=sid, index=index),
+            "events_url": url_for("participant.events", sid=sid, index=index),
+            "require_full_playback": study.require_full_playback,
+            "min_width": study.min_width}
+    slots = n_slots(spec)
+    data["videos"] = [url_for("media.video", sid=sid, index=index, slot=k) for k in range(slots)]
+    if spec["type"] in ("pairwise", "mushra", "likert"):
+        data["training"] = bool(spec.get("training"))
+        data["muted"] = _page_cfg(study, spec)["muted"]
+    if spec["type"] == "pairwise":
+        levels = _page_cfg(study, spec)["levels"]
+        data["options"] = [{"value": v, "label": lbl} for v, lbl in
+                           zip(PAIRWISE_ANSWERS[levels], PAIRWISE_LABELS[levels])]
+    return data
+
+
+def _ended(sess):
+    study = _study()
+    if sess.status == "finished":
+        code = study.completion_code
+        link = study.completion_url(code) if study.platform == "prolific" and code else ""
+        mturk = sess.platform_data if study.platform == "mturk" else None
+        return render_template("finish.html", study=study, code=code, link=link, mturk=mturk,
+                               text=study.pages[-1].cfg["text"], redirect_seconds=study.redirect_seconds)
+    if sess.status == "failed":
+        code = study.failure_code
+        link = study.completion_url(code) if study.platform == "prolific" and code else ""
+        return render_template("failed.html", study=study, code=code, link=link)
+    return _message("Time expired", "Your place in this study has expired. Please return the task.", 410)
+
+
+def _json_body():
+    body = request.get_json(silent=True)
+    if not isinstance(body, dict):
+        raise PayloadError("expected a JSON object")
+    return body
+
+
+@bp.route("/s/<sid>/answer/<int:index>", methods=["POST"])
+def answer(sid, index):
+    _own(sid)
+    study, store = _study(), _store()
+    try:
+        body = _json_body()
+        extra = sorted(set(body) - {"token", "answer", "events", "client_rt_ms", "width"})
+        if extra:
+            raise PayloadError(f"unexpected field {extra[0]!r}")
+        token = parse_token(body.get("token"))
+        client_rt = body.get("client_rt_ms")
+        if client_rt is not None and (isinstance(client_rt, bool) or not isinstance(client_rt, int)
+                                      or not 0 <= client_rt <= 10**9):
+            raise PayloadError("client_rt_ms: expected a non-negative integer")
+    except PayloadError as exc:
+        return jsonify(error=str(exc)), 422
+
+    def evaluate(db, sess, pages):
+        if not 0 <= index < len(pages):
+            raise PayloadError("no such page")
+        spec = pages[index]
+        data = parse_answer(study, spec, body.get("answer"))
+        events = parse_events(body.get("events"), n_slots(spec))
+        slots = n_slots(spec)
+        if slots:
+            kind = "ended" if study.require_full_playback else "play"
+            seen = store.slots_with(db, sid, index, kind) | {
+                e["slot"] for e in events if e["kind"] == kind}
+            if not set(range(slots)) <= seen:
+                what = "to the end " if kind == "ended" else ""
+                raise PayloadError(f"please play every video {what}before answering")
+        if spec["type"] == "consent":
+            width = body.get("width")
+            if isinstance(width, int) and not isinstance(width, bool):
+                data["width"] = width
+        data["_client_rt_ms"] = client_rt
+        return data, score_attention(study, spec, data), events
+
+    try:
+        status, ans, sess = store.submit(sid, index, token, evaluate)
+    except PayloadError as exc:
+        return jsonify(error=str(exc)), 422
+    nxt = url_for("participant.page", sid=sid)
+    if status == "conflict":
+        return jsonify(error="this page was already answered; the stored answer is kept",
+                       next=nxt), 409
+    return jsonify(status=status, next=nxt, session_status=sess.status)
+
+
+@bp.route("/s/<sid>/draft/<int:index>", methods=["POST"])
+def draft(sid, index):
+    _own(sid)
+    try:
+        body = _json_body()
+        d = body.get("draft")
+        if set(body) - {"draft"} or not isinstance(d, dict) or len(str(d)) > 20000:
+            raise PayloadError("expected {\"draft\": {...}} of at most 20000 characters")
+        _check_draft(d)
+    except PayloadError as exc:
+        return jsonify(error=str(exc)), 422
+    ok = _store().save_draft(sid, index, d)
+    return (jsonify(saved=True), 200) if ok else (jsonify(error="not the current page"), 409)
+
+
+def _check_draft(d, depth=0):
+    """Drafts are plain JSON of limited depth: strings, numbers, booleans, lists, objects."""
+    if depth > 4:
+        raise PayloadError("draft too deeply nested")
+    items = d.items() if isinstance(d, dict) else enumerate(d) if isinstance(d, list) else ()
+    for k, v in items:
+        if isinstance(k, str) and len(k) > 64:
+            raise PayloadError("draft key too long")
+        if isinstance(v, (dict, list)):
+            _check_draft(v, depth + 1)
+        elif not (v is None or isinstance(v, (str, int, float, bool))) or (isinstance(v, str) and len(v) > 2000):
+            raise PayloadError("draft values must be short strings, numbers or booleans")
+
+
+@bp.route("/s/<sid>/events/<int:index>", methods=["POST"])
+def events(sid, index):
+    _own(sid)
+    store = _store()
+    sess, pages, _ = store.load(sid)
+    if sess is None or not 0 <= index < len(pages):
+        abort(404)
+    try:
+        body = _json_body()
+        if set(body) - {"events"}:
+            raise PayloadError("expected {\"events\": [...]}")
+        evs = parse_events(body.get("events"), n_slots(pages[index]))
+    except PayloadError as exc:
+        return jsonify(error=str(exc)), 422
+    store.log_events(sid, index, evs)
+    return jsonify(logged=len(evs))
