@@ -223,14 +223,15 @@ def load_manifest(path) -> Manifest:
         row = {(k or "").strip(): (v or "").strip() for k, v in row.items() if k is not None}
         if not any(row.values()):
             continue
-        for col in MANIFEST_REQUIRED:
-            if not row.get(col):
-                raise StudyDefinitionError("empty value; expected a non-empty string",
-                                           path=path, line=lineno, field=col)
         kind = row.get("kind") or "stimulus"
         if kind not in MANIFEST_KINDS:
             raise StudyDefinitionError(f"expected one of {', '.join(MANIFEST_KINDS)}, got {kind!r}",
                                        path=path, line=lineno, field="kind")
+        for col in MANIFEST_REQUIRED:
+            # Attention-check clips belong to no condition: theirs may stay empty.
+            if not row.get(col) and not (col == "condition" and kind == "attention"):
+                raise StudyDefinitionError("empty value; expected a non-empty string",
+                                           path=path, line=lineno, field=col)
         file = row["file"]
         _check_file_name(file, root, path, lineno)
         if file in seen_files:

@@ -106,7 +106,6 @@ def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incompl
 
     # Duplicate participant ids.
     counts = sessions.groupby("participant", sort=False)["session"].transform("size")
-    rank = sessions.groupby("participant", sort=False).cumcount()
     for _, s in sessions[counts > 1].iterrows():
         same = sessions[sessions["participant"] == s["participant"]]["session"].tolist()
         first = same[0]
@@ -117,7 +116,6 @@ def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incompl
         else:
             detail = f"participant id already counted with session {first!r}"
         records.append((s["participant"], s["session"], "duplicate_participant", detail))
-    del rank
 
     # Session status.
     status = df.groupby("session", sort=False).agg(participant=("participant", "first"),

@@ -105,8 +105,12 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
         if not between.empty:
             T["mismatch_barnard"] = between
             res.notes += _notes(between, "Barnard", ["question", "condition_1", "condition_2"])
-        if not pw.empty:
-            T["elo"] = elo_table(pw, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha)
+        # A ranking needs comparisons between systems; matched-vs-mismatched pairs are not.
+        mism = pw["condition_b"] == pw["condition_a"] + opt.mismatch_suffix
+        mism |= pw["condition_a"] == pw["condition_b"] + opt.mismatch_suffix
+        ranked = pw[~mism] if opt.mismatch_suffix else pw
+        if not ranked.empty:
+            T["elo"] = elo_table(ranked, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha)
             res.notes += _notes(T["elo"].drop_duplicates(["question", "note"]), "ranking", ["question"])
     mu_design = design[design["page_type"] == "mushra"]
     mu = data[data["page_type"] == "mushra"]

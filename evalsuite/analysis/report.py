@@ -22,7 +22,8 @@ import pandas as pd  # noqa: E402
 DASH = "–"
 _P_COLUMNS = {"p_value", "p_holm", "p_bonferroni"}
 _INT_LIKE = {"n", "k", "n_a", "n_b", "n_tie", "n_a_strong", "n_b_strong", "n_participants", "levels",
-             "n_pages", "n_zero", "n_items", "n_units", "n_judgements", "n_matched", "n_mismatched"}
+             "n_pages", "n_zero", "n_items", "n_units", "n_judgements", "n_matched", "n_mismatched",
+             "df_num", "df_den", "sessions"}
 
 
 def _fmt(col: str, v, dash: str = DASH) -> str:
@@ -120,8 +121,8 @@ def fig_preferences(table: pd.DataFrame, question: str, tie_policy: str):
     ax.set_yticks(y, [f"{r.condition_a} vs {r.condition_b}" for r in sub.itertuples(index=False)])
     ax.set_xlim(0, 1)
     ax.set_ylim(-0.8, len(sub) - 0.2)
-    ax.set_xlabel(f"share of judgements: A (blue), tie (grey), B (orange); "
-                  f"dot = preference for A, ties {tie_policy}, 95% CI")
+    ax.set_xlabel(f"judgements: A (blue), tie (grey), B (orange)\n"
+                  f"dot: preference for A (ties {tie_policy}) with 95% CI")
     ax.set_title(f"Pairwise preference: {question}  (* = significant after Holm)")
     fig.tight_layout()
     return fig
@@ -225,14 +226,15 @@ td:first-child,th:first-child{text-align:left}
 .note{background:#fff6d5;border-left:4px solid #e0b000;padding:0.5em 1em}
 .blind{background:#e8f0ff;border-left:4px solid #3366cc;padding:0.5em 1em}
 figure{margin:1em 0}img{max-width:100%;border:1px solid #ddd}
-figcaption{font-size:13px;color:#555}
+figcaption{font-size:13px;color:#555}.scroll{overflow-x:auto}
 """
 
 
 def html_table(df: pd.DataFrame) -> str:
     if df is None or df.empty:
         return "<p><em>(no rows)</em></p>"
-    return display_frame(df).to_html(index=False, escape=True, border=0)
+    return ('<div class="scroll">' + display_frame(df).to_html(index=False, escape=True, border=0)
+            + "</div>")
 
 
 def html_figure(path: pathlib.Path, caption: str) -> str:

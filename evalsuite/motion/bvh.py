@@ -232,9 +232,12 @@ def _frames_fast(body: bytes, n_frames: int, n_ch: int) -> np.ndarray | None:
             return np.ascontiguousarray(arr)
     except (ValueError, pd.errors.ParserError):
         pass
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # numpy warns when it stops at a bad token
-        flat = np.fromstring(stripped.decode("latin-1"), dtype=np.float64, sep=" ")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # older numpy warns when it stops at a bad token
+            flat = np.fromstring(stripped.decode("latin-1"), dtype=np.float64, sep=" ")
+    except ValueError:  # newer numpy raises instead
+        return None
     if flat.size != n_frames * n_ch or not np.isfinite(flat).all():
         return None
     return flat.reshape(n_frames, n_ch)
@@ -258,6 +261,8 @@ def parse_bvh(data: bytes | str, path: str = "<string>"):
     motion_line = data.count(b"\n", 0, match.start()) + 1
 
     rest = data[match.end():]
+    if rest.startswith(b"\n"):
+        rest = rest[1:]  # the rest of the MOTION line itself
     # Frames: and Frame Time: come next, each on its own line (blank lines tolerated).
     pos = 0
     line_no = motion_line
@@ -297,6 +302,12 @@ def parse_bvh(data: bytes | str, path: str = "<string>"):
     if nul >= 0:
         raise BVHError(f"binary data (NUL byte) in the frame data; expected text", path=path,
                        line=time_line + 1 + body.count(b"\n", 0, nul))
+    if skeleton.n_channels == 0:
+        # No channels: frame lines are empty, so only stray content can be wrong.
+        if body.strip():
+            bad = len(body[: body.index(body.strip()[:1])].split(b"\n"))
+            raise BVHError("frame data found but the hierarchy has no channels", path=path, line=time_line + bad)
+        return skeleton, np.zeros((n_frames, 0)), frame_time
     values = _frames_fast(body, n_frames, skeleton.n_channels)
     if values is None:
         lines = body.decode("utf-8", errors="replace").split("\n")

@@ -1,0 +1,140 @@
+"""Export of stored answers: ``results.csv`` (docs/results_format.md) and a raw JSON dump.
+
+One row per judgement. Pairwise answers are translated from the screen (left/right) to
+A/B with the plan's ``position_a``; 5-level answers become ``a``/``b`` + ``weak``/``strong``.
+For matched-vs-mismatched pairs A is the matched video and ``condition_b`` is the
+condition name followed by ``:mismatched``. Attention-check stimuli use the manifest's
+condition (or ``attention_check`` when it is empty). Consent/questionnaire answers are only
+in the raw JSON.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+from study_app.answers import pairwise_expected_screen, screen_side
+from study_app.definition import Study, _mushra_expected
+
+COLUMNS = ["study", "participant", "platform", "session", "session_status", "page", "page_type",
+           "trial", "question", "scale", "segment", "condition", "condition_a", "condition_b",
+           "position_a", "answer", "strength", "role", "rt_ms", "is_training", "is_attention_check",
+           "attention_expected", "attention_passed", "shown_at", "answered_at", "reasons"]
+
+
+def _iso(t) -> str:
+    return t.isoformat(timespec="milliseconds") + "Z" if t is not None else ""
+
+
+def _session_status(status: str) -> str:
+    return status if status in ("finished", "failed") else "incomplete"
+
+
+def _ab(side: str, position_a: str) -> str:
+    if side == "equal":
+        return "tie"
+    return "a" if side == position_a else "b"
+
+
+def _condition(stim) -> str:
+    if stim.kind == "attention":
+        return stim.condition or "attention_check"
+    return stim.condition + (":mismatched" if stim.mismatched else "")
+
+
+def result_rows(study: Study, dump: dict) -> list[dict]:
+    by_file = study.manifest.by_file()
+    sessions = {s.id: s for s in dump["sessions"]}
+    rows = []
+    for ans in dump["answers"]:
+        sess = sessions[ans.session_id]
+        page = dump["plans"][sess.plan_id].pages[ans.page_index] if sess.plan_id in dump["plans"] else None
+        if page is None or page["type"] not in ("pairwise", "mushra", "likert"):
+            continue
+        block = study.page(page["block"]).cfg
+        base = {"study": study.id, "participant": sess.participant, "platform": sess.platform,
+                "session": sess.id, "session_status": _session_status(sess.status),
+                "page": page["page"], "page_type": page["type"], "trial": ans.page_index,
+                "segment": page["segment"], "rt_ms": ans.rt_ms,
+                "is_training": int(bool(page.get("training"))), "is_attention_check": 0,
+                "attention_expected": "", "attention_passed": "",
+                "shown_at": _iso(ans.shown_at), "answered_at": _iso(ans.answered_at)}
+        data = ans.data
+        if page["type"] == "pairwise":
+            a, b = by_file[page["a"]], by_file[page["b"]]
+            expected = ""
+            if page.get("check"):
+                side, strength = pairwise_expected_screen(a.expected, page["position_a"])
+                expected = _ab(side, page["position_a"]) + (f"/{strength}" if strength else "")
+            for q in block["questions"]:
+                side, strength = screen_side(data["choices"][q["id"]])
+                rows.append({**base, "question": q["id"], "condition_a": _condition(a),
+                             "condition_b": _condition(b), "position_a": page["position_a"],
+                             "answer": _ab(side, page["position_a"]), "strength": strength,
+                             "reasons": ";".join(data.get("reasons", [])),
+                             **_check_cols(page, ans, expected)})
+        elif page["type"] == "mushra":
+            for k, file in enumerate(page["slots"]):
+                stim = by_file[file]
+                is_check = k == page.get("check_slot")
+                row = {**base, "question": block["question"]["id"], "condition": _condition(stim),
+                       "position_a": k, "answer": data["ratings"][k], "role": page["roles"][k]}
+                if is_check:
+                    lo, hi = _mushra_expected(stim.expected, block["bands"])
+                    expected = str(stim.expected) if lo == hi else f"{lo:g}-{hi:g}"
+                    row.update(is_attention_check=1, attention_expected=expected,
+                               attention_passed=int(bool(ans.attention_passed)))
+                rows.append(row)
+        else:
+            stim = by_file[page["stimulus"]]
+            for st in block["statements"]:
+                rows.append({**base, "question": st["id"], "scale": st["scale"],
+                             "condition": _condition(stim), "answer": data["ratings"][st["id"]],
+                             **_check_cols(page, ans, stim.expected if page.get("check") else "")})
+    for r in rows:
+        for c in COLUMNS:
+            r.setdefault(c, "")
+    return rows
+
+
+def _check_cols(page, ans, expected):
+    if not page.get("check"):
+        return {}
+    return {"is_attention_check": 1, "attention_expected": expected,
+            "attention_passed": int(bool(ans.attention_passed))}
+
+
+def results_csv(study: Study, dump: dict) -> str:
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for row in result_rows(study, dump):
+        writer.writerow(row)
+    return buf.getvalue()
+
+
+def raw_json(study: Study, dump: dict) -> str:
+    """Everything stored for the study: sessions (with platform ids), answers, events, plans."""
+    def sess(s):
+        return {"id": s.id, "participant": s.participant, "platform": s.platform,
+                "platform_data": s.platform_data, "plan": dump["plans"][s.plan_id].key if s.plan_id in dump["plans"] else None,
+                "status": s.status, "end_reason": s.end_reason, "current_page": s.current_page,
+                "failed_checks": s.failed_checks, "passed_checks": s.passed_checks,
+                "honeypot": s.honeypot, "user_agent": s.user_agent, "created_at": _iso(s.created_at),
+                "finished_at": _iso(s.finished_at)}
+    out = {
+        "study": study.id,
+        "sessions": [sess(s) for s in dump["sessions"]],
+        "answers": [{"session": a.session_id, "page_index": a.page_index, "page": a.page_id,
+                     "submit_token": a.submit_token, "data": a.data,
+                     "attention_passed": a.attention_passed, "rt_ms": a.rt_ms,
+                     "client_rt_ms": a.client_rt_ms, "shown_at": _iso(a.shown_at),
+                     "answered_at": _iso(a.answered_at)} for a in dump["answers"]],
+        "events": [{"session": e.session_id, "page_index": e.page_index, "kind": e.kind,
+                    "slot": e.slot, "media_time": e.media_time, "client_ms": e.client_ms,
+                    "detail": e.detail, "server_time": _iso(e.server_time)} for e in dump["events"]],
+        "plans": [{"key": p.key, "status": p.status, "session": p.session_id,
+                   "reserved_until": _iso(p.reserved_until), "times_released": p.times_released,
+                   "pages": p.pages} for p in sorted(dump["plans"].values(), key=lambda p: p.position)],
+    }
+    return json.dumps(out, indent=1)

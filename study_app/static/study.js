@@ -1,0 +1,243 @@
+// Participant page logic: playback gating, interaction log, autosave, idempotent submit.
+(function () {
+  "use strict";
+  var fill = document.querySelector(".progress .fill");
+  if (fill) fill.style.width = fill.getAttribute("data-fill") + "%";
+  var dataEl = document.getElementById("page-data");
+  if (!dataEl) return;
+  var data = JSON.parse(dataEl.textContent);
+  var form = document.getElementById("page-form");
+  var csrf = document.getElementById("csrf_token").value;
+  var next = document.getElementById("next");
+  var msg = document.getElementById("message");
+  var tokenKey = "evalsuite-token:" + data.answer_url;
+  var shownAt = performance.now();
+  var queue = [];
+  var done = new Set();
+  var touched = new Set();
+  var busy = false;
+
+  function rid() {
+    var a = new Uint8Array(12);
+    crypto.getRandomValues(a);
+    return Array.prototype.map.call(a, function (b) { return ("0" + b.toString(16)).slice(-2); }).join("");
+  }
+  function log(kind, slot, t, detail) {
+    queue.push({id: rid(), kind: kind, slot: slot === undefined ? null : slot,
+                t: t === undefined ? null : t, ms: Date.now(), detail: detail || ""});
+  }
+  function post(url, body) {
+    return fetch(url, {method: "POST", credentials: "same-origin",
+      headers: {"Content-Type": "application/json", "X-CSRFToken": csrf, "Accept": "application/json"},
+      body: JSON.stringify(body)});
+  }
+  function flush() {
+    if (!queue.length) return Promise.resolve();
+    var batch = queue; queue = [];
+    return post(data.events_url, {events: batch}).then(function (r) {
+      if (!r.ok && r.status >= 500) queue = batch.concat(queue);
+    }, function () { queue = batch.concat(queue); });
+  }
+  setInterval(flush, 4000);
+
+  // ---- videos
+  var videos = Array.prototype.slice.call(document.querySelectorAll("video[data-slot]"));
+  function coverage(v) {
+    var total = 0;
+    for (var i = 0; i < v.played.length; i++) total += v.played.end(i) - v.played.start(i);
+    return v.duration ? total / v.duration : 0;
+  }
+  function button(slot) { return document.querySelector("button.play[data-slot='" + slot + "']"); }
+  function statusEl(slot) { return document.querySelector(".status[data-slot='" + slot + "']"); }
+  function refreshButton(v) {
+    var b = button(Number(v.getAttribute("data-slot")));
+    if (b) b.textContent = v.paused ? (v.ended || done.has(Number(v.getAttribute("data-slot"))) ? "Play again" : "Play") : "Pause";
+  }
+  function markDone(slot) {
+    done.add(slot);
+    var s = statusEl(slot);
+    if (s) { s.textContent = "watched"; s.classList.add("ok"); }
+    update();
+  }
+  videos.forEach(function (v) {
+    var slot = Number(v.getAttribute("data-slot"));
+    v.addEventListener("play", function () {
+      videos.forEach(function (o) { if (o !== v && !o.paused) o.pause(); });  // one video at a time
+      log("play", slot, v.currentTime);
+      if (!data.require_full_playback) markDone(slot);
+      refreshButton(v);
+    });
+    v.addEventListener("pause", function () { if (!v.ended) log("pause", slot, v.currentTime); refreshButton(v); });
+    v.addEventListener("seeked", function () { log("seeked", slot, v.currentTime); });
+    v.addEventListener("ended", function () {
+      var cov = coverage(v);
+      log("ended", slot, v.currentTime, "coverage=" + cov.toFixed(3));
+      if (!data.require_full_playback || cov >= 0.9) markDone(slot);
+      refreshButton(v);
+      flush();
+    });
+    var b = button(slot);
+    if (b) b.addEventListener("click", function () {
+      if (v.paused) {
+        if (v.ended) v.currentTime = 0;
+        var p = v.play();
+        if (p && p.catch) p.catch(function (e) { msg.textContent = "The video could not be played (" + e.name + "). Please try again."; });
+      } else { v.pause(); }
+    });
+  });
+  (data.require_full_playback ? data.ended || [] : data.played || []).forEach(function (s) { markDone(Number(s)); });
+
+  // ---- answers
+  function inputs() { return Array.prototype.slice.call(form.querySelectorAll("input, select, textarea")); }
+  function collect() {
+    var t = data.type;
+    if (t === "consent") {
+      var hp = document.getElementById("website");
+      return {agree: document.getElementById("agree").checked, website: hp ? hp.value : ""};
+    }
+    if (t === "instructions") return {};
+    if (t === "questionnaire") {
+      var out = {};
+      form.querySelectorAll("[data-qid]").forEach(function (el) { out[el.getAttribute("data-qid")] = el.value; });
+      return out;
+    }
+    if (t === "pairwise") {
+      var choices = {};
+      form.querySelectorAll("fieldset.question").forEach(function (fs) {
+        var c = fs.querySelector("input:checked");
+        choices[fs.getAttribute("data-question")] = c ? c.value : null;
+      });
+      var reasons = [];
+      form.querySelectorAll("input[name=reason]:checked").forEach(function (c) { reasons.push(c.value); });
+      return {choices: choices, reasons: reasons};
+    }
+    if (t === "mushra") {
+      return {ratings: Array.prototype.map.call(form.querySelectorAll("input[type=range]"), function (r) { return Number(r.value); })};
+    }
+    if (t === "likert") {
+      var ratings = {};
+      form.querySelectorAll("tr[data-statement]").forEach(function (tr) {
+        var c = tr.querySelector("input:checked");
+        ratings[tr.getAttribute("data-statement")] = c ? Number(c.value) : null;
+      });
+      return {ratings: ratings};
+    }
+    return {};
+  }
+  function missing() {
+    var t = data.type, a = collect();
+    var need = videos.length - videos.filter(function (v) { return done.has(Number(v.getAttribute("data-slot"))); }).length;
+    if (t === "consent" && !a.agree) return "Please tick the box to agree.";
+    if (t === "pairwise") {
+      if (need) return "Watch both videos" + (data.require_full_playback ? " to the end" : "") + " first.";
+      for (var q in a.choices) if (!a.choices[q]) return "Please answer every question.";
+    }
+    if (t === "mushra") {
+      if (need) return "Play every video" + (data.require_full_playback ? " to the end" : "") + " and rate it.";
+      if (touched.size < videos.length) return "Please rate every video (move each slider).";
+    }
+    if (t === "likert") {
+      if (need) return "Watch the video" + (data.require_full_playback ? " to the end" : "") + " first.";
+      for (var s in a.ratings) if (a.ratings[s] === null) return "Please rate every statement.";
+    }
+    return "";
+  }
+  function blocked() { return data.min_width && window.innerWidth < data.min_width; }
+  function update() {
+    inputs().forEach(function (el) {
+      var needs = el.getAttribute("data-needs");
+      if (needs === null) return;
+      el.disabled = needs === "all" ? done.size < videos.length : !done.has(Number(needs));
+    });
+    form.querySelectorAll("input[type=range]").forEach(function (r) {
+      var o = form.querySelector("output[data-slot='" + r.getAttribute("data-slot") + "']");
+      if (o) o.textContent = touched.has(Number(r.getAttribute("data-slot"))) ? r.value : "–";
+    });
+    var gate = document.getElementById("gate");
+    if (gate) gate.hidden = !blocked();
+    var m = missing();
+    next.disabled = busy || !!m || blocked();
+    if (!busy && msg.getAttribute("data-kind") !== "error") msg.textContent = m;
+  }
+
+  // ---- autosave (restored on reload or after a server restart)
+  function snapshot() {
+    var fields = {};
+    inputs().forEach(function (el) {
+      if (!el.name || el.name === "csrf_token" || el.name === "website") return;
+      if (el.type === "radio") { if (el.checked) fields[el.name] = el.value; }
+      else if (el.type === "checkbox") fields[el.name + ":" + el.value] = el.checked;
+      else fields[el.name] = el.value;
+    });
+    return {fields: fields, touched: Array.from(touched)};
+  }
+  function restore(d) {
+    var f = (d && d.fields) || {};
+    inputs().forEach(function (el) {
+      if (el.type === "radio") { if (f[el.name] === el.value) el.checked = true; }
+      else if (el.type === "checkbox") { if (f[el.name + ":" + el.value]) el.checked = true; }
+      else if (el.name in f && el.name !== "csrf_token") el.value = f[el.name];
+    });
+    ((d && d.touched) || []).forEach(function (s) { touched.add(Number(s)); });
+  }
+  var saveTimer = null;
+  function scheduleSave() {
+    clearTimeout(saveTimer);
+    saveTimer = setTimeout(function () { post(data.draft_url, {draft: snapshot()}).catch(function () {}); }, 400);
+  }
+  form.addEventListener("input", function (ev) {
+    var el = ev.target;
+    if (el.type === "range") touched.add(Number(el.getAttribute("data-slot")));
+    if (el.type === "radio" || el.type === "range") log("choice", el.getAttribute("data-slot") === null ? null : Number(el.getAttribute("data-slot")), null, (el.name + "=" + el.value).slice(0, 200));
+    msg.removeAttribute("data-kind");
+    update();
+    scheduleSave();
+  });
+  form.addEventListener("change", function () { update(); scheduleSave(); });
+  window.addEventListener("resize", update);
+  document.addEventListener("visibilitychange", function () { log(document.hidden ? "hidden" : "visible"); });
+  restore(data.draft);
+
+  // ---- submit: one token per page, reused by every retry, so the server stores one answer
+  function sleep(ms) { return new Promise(function (r) { setTimeout(r, ms); }); }
+  form.addEventListener("submit", function (ev) {
+    ev.preventDefault();
+    if (next.disabled || busy) return;
+    busy = true; next.disabled = true;
+    msg.removeAttribute("data-kind");
+    msg.textContent = "Saving…";
+    var token = sessionStorage.getItem(tokenKey);
+    if (!token) { token = rid(); sessionStorage.setItem(tokenKey, token); }
+    var events = queue; queue = [];
+    var body = {token: token, answer: collect(), events: events,
+                client_rt_ms: Math.round(performance.now() - shownAt)};
+    if (data.type === "consent") body.width = window.innerWidth;
+    (async function () {
+      for (var attempt = 0; attempt < 6; attempt++) {
+        var r = null;
+        try { r = await post(data.answer_url, body); } catch (e) { r = null; }
+        if (r && (r.ok || r.status === 409)) {
+          var j = await r.json();
+          sessionStorage.removeItem(tokenKey);
+          window.location.assign(j.next);
+          return;
+        }
+        if (r && r.status >= 400 && r.status < 500) {
+          var err = await r.json().catch(function () { return {}; });
+          msg.textContent = err.error || "Your answer could not be saved.";
+          msg.setAttribute("data-kind", "error");
+          queue = events.concat(queue);
+          busy = false; update();
+          return;
+        }
+        msg.textContent = "Connection problem, retrying…";
+        await sleep(400 * Math.pow(2, attempt));
+      }
+      msg.textContent = "The server cannot be reached. Check your connection and press Next again.";
+      msg.setAttribute("data-kind", "error");
+      queue = events.concat(queue);
+      busy = false; update();
+    })();
+  });
+  update();
+})();
