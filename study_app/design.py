@@ -85,13 +85,19 @@ def _regular_page(block, g: int, lookup: _Lookup, segments: list[str]) -> dict:
             seg = _segment_for(g, len(pairs), segments)
             a, b = lookup.file(x, seg), lookup.file(y, seg)
             occurrence = g // len(pairs)
+        # Alternates for every item (balance) and differs between neighbouring items (so one
+        # session does not show every A on the same side).
+        n_items = len(cfg["conditions"] if cfg["mismatched"] else cfg["pairs"])
+        flip = (occurrence + g % n_items) % 2
         return {"type": "pairwise", "segment": seg, "a": a, "b": b,
-                "position_a": "left" if occurrence % 2 == 0 else "right"}
+                "position_a": "left" if flip == 0 else "right"}
     if block.type == "mushra":
         seg = segments[g % len(segments)]
         slots = [(c, "") for c in cfg["conditions"]]
         slots += [(cfg[r], r) for r in ("reference", "anchor") if cfg.get(r)]
-        shift = (g // len(segments)) % len(slots)
+        # Each condition in each slot equally often over len(slots) consecutive pages; the
+        # shift moves every lcm(...) pages so slots and segments are not confounded.
+        shift = (g + g // math.lcm(len(segments), len(slots))) % len(slots)
         slots = slots[shift:] + slots[:shift]
         return {"type": "mushra", "segment": seg, "slots": [lookup.file(c, seg) for c, _ in slots],
                 "roles": [r for _, r in slots]}
