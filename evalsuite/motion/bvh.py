@@ -229,7 +229,8 @@ def _frames_fast(body: bytes, n_frames: int, n_ch: int) -> np.ndarray | None:
         if arr.shape[1] == n_ch + 1 and np.isnan(arr[:, -1]).all():
             arr = arr[:, :-1]  # trailing space at the end of every line
         if arr.shape == (n_frames, n_ch) and np.isfinite(arr).all():
-            return np.ascontiguousarray(arr)
+            # Column-major as pandas builds it: no copy, and FK reads whole channel columns.
+            return arr
     except (ValueError, pd.errors.ParserError):
         pass
     try:

@@ -16,7 +16,6 @@ Quaternions are scalar-last ``(x, y, z, w)`` as in scipy.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 __all__ = [
     "euler_to_matrix",
@@ -30,6 +29,13 @@ __all__ = [
     "sixd_to_matrix",
     "quaternion_slerp",
 ]
+
+def _rotation():
+    # scipy.spatial takes ~0.4 s to import; forward kinematics never needs it.
+    from scipy.spatial.transform import Rotation
+
+    return Rotation
+
 
 # A matrix is held as a list of 9 entries in row-major order. Each entry is either a
 # Python float 0.0/1.0 (structurally constant) or an ndarray; keeping the constants
@@ -128,32 +134,32 @@ def _flat(m: np.ndarray):
 def matrix_to_euler(m: np.ndarray, axes: str, degrees: bool = True) -> np.ndarray:
     """Rotation matrices to intrinsic Euler angles in ``axes`` order (3 axes)."""
     flat, lead = _flat(m)
-    eul = Rotation.from_matrix(flat).as_euler(axes.upper(), degrees=degrees)
+    eul = _rotation().from_matrix(flat).as_euler(axes.upper(), degrees=degrees)
     return eul.reshape(lead + (3,))
 
 
 def matrix_to_quaternion(m: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(..., 3, 3)`` to unit quaternions ``(..., 4)`` (x, y, z, w)."""
     flat, lead = _flat(m)
-    return Rotation.from_matrix(flat).as_quat().reshape(lead + (4,))
+    return _rotation().from_matrix(flat).as_quat().reshape(lead + (4,))
 
 
 def quaternion_to_matrix(q: np.ndarray) -> np.ndarray:
     """Quaternions ``(..., 4)`` (x, y, z, w; normalised here) to matrices ``(..., 3, 3)``."""
     q = np.asarray(q, dtype=np.float64)
-    return Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(q.shape[:-1] + (3, 3))
+    return _rotation().from_quat(q.reshape(-1, 4)).as_matrix().reshape(q.shape[:-1] + (3, 3))
 
 
 def matrix_to_expmap(m: np.ndarray) -> np.ndarray:
     """Rotation matrices to exponential maps (axis * angle in radians), ``(..., 3)``."""
     flat, lead = _flat(m)
-    return Rotation.from_matrix(flat).as_rotvec().reshape(lead + (3,))
+    return _rotation().from_matrix(flat).as_rotvec().reshape(lead + (3,))
 
 
 def expmap_to_matrix(v: np.ndarray) -> np.ndarray:
     """Exponential maps (axis * angle in radians) ``(..., 3)`` to matrices ``(..., 3, 3)``."""
     v = np.asarray(v, dtype=np.float64)
-    return Rotation.from_rotvec(v.reshape(-1, 3)).as_matrix().reshape(v.shape[:-1] + (3, 3))
+    return _rotation().from_rotvec(v.reshape(-1, 3)).as_matrix().reshape(v.shape[:-1] + (3, 3))
 
 
 def matrix_to_6d(m: np.ndarray) -> np.ndarray:
