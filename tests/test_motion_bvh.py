@@ -314,3 +314,28 @@ def test_world_rotations_match_reference():
         r = Rotation.from_euler(axes, angles, degrees=True).as_matrix()
         world.append(r if sk.parents[j] < 0 else world[sk.parents[j]] @ r)
     np.testing.assert_allclose(rot[t], np.stack(world), atol=1e-12)
+
+
+NUMBER_FORMATS = [
+    lambda v: f"{v:.6f}", lambda v: f"{v:+.3f}", lambda v: f"{v:.4e}", lambda v: f"{v:.2E}",
+    lambda v: f"{v:g}", lambda v: (f"{v:.5f}".replace("0.", ".", 1) if 0 <= v < 1 else f"{v:.5f}"),
+    lambda v: "-0" if v == 0 else repr(v),
+]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(-1e4, 1e4, allow_nan=False), st.integers(0, len(NUMBER_FORMATS) - 1)),
+                min_size=6, max_size=6), st.integers(1, 5), st.sampled_from([" ", "\t", "  ", " \t "]))
+def test_number_formats_parse_like_python(cells, n_frames, sep):
+    """Every number spelling real files use parses to Python's float() of the token, on both fast paths."""
+    header = ("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition "
+              "Zrotation Xrotation Yrotation\n End Site\n {\n  OFFSET 0 1 0\n }\n}\n")
+    rows = []
+    expected = []
+    for f in range(n_frames):
+        tokens = [NUMBER_FORMATS[k](v * (f + 1)) for v, k in cells]
+        rows.append(sep.join(tokens))
+        expected.append([float(t) for t in tokens])
+    text = header + f"MOTION\nFrames: {n_frames}\nFrame Time: 0.05\n" + "\n".join(rows) + "\n"
+    _, values, _ = parse_bvh(text)
+    np.testing.assert_allclose(values, np.array(expected), rtol=1e-15, atol=0)
