@@ -167,10 +167,10 @@ def test_barnard_against_enumeration(x1, n1, x2, n2):
 
 
 def test_mismatch_tables_split_ties_and_barnard_holm():
-    spec = ([("X", "X_mismatched", "a", "strong")] * 8 + [("X_mismatched", "X", "a", "weak")] * 2
-            + [("X", "X_mismatched", "tie", "")] * 3
-            + [("Y", "Y_mismatched", "a", "weak")] * 5 + [("Y", "Y_mismatched", "b", "weak")] * 5
-            + [("Z", "Z_mismatched", "a", "")] * 6 + [("Z", "Z_mismatched", "b", "")] * 1)
+    spec = ([("X", "X:mismatched", "a", "strong")] * 8 + [("X:mismatched", "X", "a", "weak")] * 2
+            + [("X", "X:mismatched", "tie", "")] * 3
+            + [("Y", "Y:mismatched", "a", "weak")] * 5 + [("Y", "Y:mismatched", "b", "weak")] * 5
+            + [("Z", "Z:mismatched", "a", "")] * 6 + [("Z", "Z:mismatched", "b", "")] * 1)
     table = pairwise_table(rows(spec))
     per, between = mismatch_tables(table, tie_policy="split")
     per = per.set_index("condition")
@@ -183,3 +183,11 @@ def test_mismatch_tables_split_ties_and_barnard_holm():
     p_xy = barnard_by_enumeration(9, 13, 5, 10)
     assert b.loc[("X", "Y"), "p_value"] == pytest.approx(p_xy, abs=2e-4)
     assert list(between["p_holm"]) == pytest.approx(holm_by_hand(list(between["p_value"])))
+
+
+def test_half_policy_reports_exact_half_share_inside_its_ci():
+    df = rows([("A", "B", "a", "")] * 7 + [("A", "B", "b", "")] * 2 + [("A", "B", "tie", "")] * 3)
+    t = pairwise_table(df, tie_policy="half").iloc[0]
+    assert t.pref_a == pytest.approx(8.5 / 12)
+    assert t.p_value == pytest.approx(exact_binom_two_sided(8, 12))  # conservative whole count
+    assert t.ci_low <= t.pref_a <= t.ci_high

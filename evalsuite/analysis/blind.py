@@ -12,7 +12,7 @@ so tables, figures, the HTML report and console messages only ever show codes.
   (not even their alphabetical order).
 - ``--reveal`` analyses with the real names, writes ``blind_key.csv`` (code -> condition)
   so earlier blinded outputs can be read, and removes the marker.
-- A mismatched stimulus ``X_mismatched`` is coded as ``<code of X>_mismatched`` so the
+- A mismatched stimulus ``X:mismatched`` is coded as ``<code of X>:mismatched`` so the
   matched/mismatched analysis still pairs them.
 """
 from __future__ import annotations
@@ -41,7 +41,7 @@ def all_conditions(df: pd.DataFrame):
     return names
 
 
-def blind_codes(conditions, salt: str, mismatch_suffix: str = "_mismatched") -> dict:
+def blind_codes(conditions, salt: str, mismatch_suffix: str = ":mismatched") -> dict:
     """``{name: code}`` for ``conditions``: a salt-seeded permutation of the base names
     numbered ``B01, B02, ...``; ``X + mismatch_suffix`` maps to ``code(X) + mismatch_suffix``."""
     names = set(conditions)

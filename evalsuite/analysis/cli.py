@@ -48,7 +48,7 @@ def _attention(value):
 @click.option("--bootstrap", "n_boot", type=click.IntRange(0), default=1000, show_default=True,
               help="Participant-bootstrap rounds for Elo CIs (0 = none).")
 @click.option("--seed", type=int, default=42, show_default=True, help="Seed of the bootstrap.")
-@click.option("--mismatch-suffix", default="_mismatched", show_default=True,
+@click.option("--mismatch-suffix", default=":mismatched", show_default=True,
               help="Condition X + this suffix is X's mismatched stimulus (matched/mismatched designs).")
 @click.option("--no-figures", is_flag=True, help="Tables only (faster).")
 @click.option("--blind", is_flag=True, help="Replace condition names by stable codes in every output; "

@@ -49,28 +49,40 @@ def _read_table(path) -> pd.DataFrame:
     path = pathlib.Path(path)
     if not path.is_file():
         _fail("file not found (expected a results.csv or battles CSV)", path)
+    records, lines = [], []
     try:
-        # Everything as text: the validation below decides what each column must hold,
-        # and keep_default_na=False keeps "NA" (a common condition name) as a string.
-        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_filter=False,
-                         skipinitialspace=False, encoding="utf-8")
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh, strict=True)
+            header = next(reader, None)
+            if not header:
+                _fail("empty file: expected a header row and at least one data row", path)
+            header = [c.strip() for c in header]
+            for row in reader:
+                if not row or (len(row) == 1 and not row[0].strip()):
+                    continue  # blank line
+                if len(row) != len(header):
+                    _fail(f"row has {len(row)} fields but the header has {len(header)}; "
+                          "not a well-formed CSV (unquoted comma?)", path, line=reader.line_num)
+                records.append(row)
+                # reader.line_num is the file line where this record ended (quoted newlines ok).
+                lines.append(reader.line_num)
     except UnicodeDecodeError as exc:
         _fail(f"not UTF-8 text ({exc.reason} at byte {exc.start})", path)
-    except pd.errors.EmptyDataError:
-        _fail("empty file: expected a header row and at least one data row", path)
-    except (pd.errors.ParserError, csv.Error) as exc:
+    except csv.Error as exc:
         _fail(f"not a well-formed CSV: {exc}", path)
-    df.columns = [str(c).strip() for c in df.columns]
-    dupes = sorted({c for c in df.columns if list(df.columns).count(c) > 1})
+    dupes = sorted({c for c in header if header.count(c) > 1})
     if dupes:
         _fail(f"duplicate column(s) in the header: {', '.join(dupes)}", path, line=1)
-    if df.empty:
+    if not records:
         _fail("no data rows after the header", path)
+    # Everything as text: the validation decides what each column must hold (and "NA",
+    # a common condition name, stays a string).
+    df = pd.DataFrame(records, columns=header, dtype=str)
     for col in df.columns:
         df[col] = df[col].str.strip()
-    # Line numbers as an editor shows them: header is line 1. Quoted newlines inside a
-    # field would shift this, but results.csv never contains them.
-    df.insert(0, "line", np.arange(2, len(df) + 2))
+    # Unknown extra columns are ignored; one called "line" would clash with ours.
+    df = df.drop(columns=[c for c in ("line", "value") if c in df.columns])
+    df.insert(0, "line", np.asarray(lines, dtype=int))
     return df
 
 
@@ -213,7 +225,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
         row = df[same].iloc[0]
         _fail(f"condition_a and condition_b are both {row['condition_a']!r}; a pairwise row "
               "compares two different conditions (name the mismatched stimulus e.g. "
-              f"'{row['condition_a']}_mismatched')", path, line=int(row["line"]), field="condition_b")
+              f"'{row['condition_a']}:mismatched')", path, line=int(row["line"]), field="condition_b")
     _check_allowed(df, pw, "answer", PAIRWISE_ANSWERS, path, "a pairwise answer")
     _check_allowed(df, pw, "strength", STRENGTHS, path)
     tie_strength = pw & (df["answer"] == "tie") & (df["strength"] != "")

@@ -204,8 +204,10 @@ def pairwise_table(pw: pd.DataFrame, *, tie_policy: str = "exclude", ci_method: 
 
 # --- matched vs mismatched designs -------------------------------------------------------
 
-def mismatch_pairs(conditions, suffix: str = "_mismatched"):
+def mismatch_pairs(conditions, suffix: str = ":mismatched"):
     """``{base: mismatched}`` for every condition that has a ``base + suffix`` partner."""
+    if not suffix:
+        return {}
     conds = set(conditions)
     return {c: c + suffix for c in sorted(conds) if not c.endswith(suffix) and c + suffix in conds}
 
@@ -220,7 +222,7 @@ def barnard_p(table) -> float:
     return float(stats.barnard_exact(t, alternative="two-sided", pooled=True).pvalue)
 
 
-def mismatch_tables(pw_table: pd.DataFrame, *, suffix: str = "_mismatched", tie_policy: str = "split",
+def mismatch_tables(pw_table: pd.DataFrame, *, suffix: str = ":mismatched", tie_policy: str = "split",
                     alpha: float = 0.05):
     """Matched-vs-mismatched analysis (GENEA 2022 appropriateness).
 

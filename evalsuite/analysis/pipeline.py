@@ -34,7 +34,7 @@ class AnalysisOptions:
     zero_method: str = "wilcox"
     n_boot: int = 1000
     seed: int = 42
-    mismatch_suffix: str = "_mismatched"
+    mismatch_suffix: str = ":mismatched"
     mismatch_tie_policy: str = "split"
     study: str | None = None
     figures: bool = True
@@ -115,11 +115,8 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
     mu_design = design[design["page_type"] == "mushra"]
     mu = data[data["page_type"] == "mushra"]
     if not mu_design.empty:
-        T["ratings"] = rating_summary(mu, opt.alpha)
-        missing = sorted(set(zip(mu_design["question"], mu_design["condition"]))
-                         - set(zip(T["ratings"]["question"], T["ratings"]["condition"])))
-        for q, c in missing:
-            res.notes.append(f"ratings {q} / {c}: no ratings left after exclusions")
+        T["ratings"] = rating_summary(mu, opt.alpha,
+                                      expected=set(zip(mu_design["question"], mu_design["condition"])))
         res.notes += _notes(T["ratings"], "ratings", ["question", "condition"])
         T["ratings_pairwise"] = wilcoxon_pairs(mu, zero_method=opt.zero_method, holm_scope=opt.holm_scope,
                                                alpha=opt.alpha)

@@ -66,9 +66,19 @@ def mean_ci(x, alpha: float = 0.05):
     return (float(m - h), float(m + h))
 
 
-def rating_summary(mu: pd.DataFrame, alpha: float = 0.05) -> pd.DataFrame:
-    """The ``ratings.csv`` table (module docstring). ``mu``: mushra rows with ``value``."""
+def rating_summary(mu: pd.DataFrame, alpha: float = 0.05, expected=None) -> pd.DataFrame:
+    """The ``ratings.csv`` table (module docstring). ``mu``: mushra rows with ``value``.
+
+    ``expected``: optional ``(question, condition)`` pairs of the design; those without
+    ratings (e.g. all their raters excluded) get a row with ``n = 0`` and a note.
+    """
     rows = []
+    have = set(zip(mu["question"], mu["condition"]))
+    for q, c in sorted(set(expected or ()) - have):
+        rows.append({"question": q, "condition": c, "role": "", "n": 0, "n_participants": 0,
+                     "median": math.nan, "median_ci_low": math.nan, "median_ci_high": math.nan,
+                     "median_ci_coverage": math.nan, "mean": math.nan, "mean_ci_low": math.nan,
+                     "mean_ci_high": math.nan, "sd": math.nan, "note": "no ratings (after exclusions)"})
     for (q, c), g in mu.groupby(["question", "condition"], sort=True):
         v = g["value"].to_numpy(float)
         lo, hi, cov = median_ci(v, alpha)
@@ -84,7 +94,8 @@ def rating_summary(mu: pd.DataFrame, alpha: float = 0.05) -> pd.DataFrame:
                      "median_ci_low": lo, "median_ci_high": hi, "median_ci_coverage": cov,
                      "mean": float(v.mean()), "mean_ci_low": mlo, "mean_ci_high": mhi,
                      "sd": float(v.std(ddof=1)) if v.size > 1 else math.nan, "note": "; ".join(notes)})
-    return pd.DataFrame(rows, columns=RATINGS_COLUMNS)
+    out = pd.DataFrame(rows, columns=RATINGS_COLUMNS)
+    return out.sort_values(["question", "condition"], kind="stable").reset_index(drop=True)
 
 
 def rank_biserial(d) -> float:

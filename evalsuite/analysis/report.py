@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import math
 import pathlib
 
@@ -158,8 +157,7 @@ def fig_significance(matrix: pd.DataFrame, question: str):
 
     m = matrix.to_numpy(float)
     fig, ax = plt.subplots(figsize=(max(4, 0.55 * len(matrix) + 2.5), max(3.5, 0.55 * len(matrix) + 1.8)))
-    cmap = ListedColormap(["#d6604d", "#bbbbbb", "#4dac26"])
-    cmap.set_bad("white")
+    cmap = ListedColormap(["#d6604d", "#bbbbbb", "#4dac26"]).with_extremes(bad="white")
     ax.imshow(np.ma.masked_invalid(m), cmap=cmap, vmin=-1, vmax=1)
     ax.set_xticks(range(len(matrix)), matrix.columns, rotation=45, ha="right")
     ax.set_yticks(range(len(matrix)), matrix.index)
@@ -197,6 +195,8 @@ def fig_bars_ci(df: pd.DataFrame, label_col: str, value_col: str, title: str, xl
     ok = np.isfinite(lo) & np.isfinite(v)
     ax.barh(y, np.nan_to_num(v), color="#9ecae1", height=0.6)
     ax.errorbar(v[ok], y[ok], xerr=[v[ok] - lo[ok], hi[ok] - v[ok]], fmt="none", ecolor="black", capsize=4)
+    for yi in y[~np.isfinite(v)]:
+        ax.text(0.02, yi, "no data", transform=ax.get_yaxis_transform(), va="center", style="italic", color="0.3")
     if ref is not None:
         ax.axvline(ref, color="black", lw=0.8, ls="--")
     if xlim:
@@ -221,7 +221,7 @@ body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em a
 color:#222;padding:0 1em}
 h1{border-bottom:2px solid #444}h2{border-bottom:1px solid #bbb;margin-top:2em}
 table{border-collapse:collapse;font-size:13px;margin:0.6em 0}
-th,td{border:1px solid #ccc;padding:3px 7px;text-align:right}th{background:#f0f0f0}
+th,td{border:1px solid #ccc;padding:3px 7px;text-align:right;white-space:nowrap}th{background:#f0f0f0}
 td:first-child,th:first-child{text-align:left}
 .note{background:#fff6d5;border-left:4px solid #e0b000;padding:0.5em 1em}
 .blind{background:#e8f0ff;border-left:4px solid #3366cc;padding:0.5em 1em}

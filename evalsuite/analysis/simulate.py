@@ -7,7 +7,7 @@
 The design covers every page type the analysis handles:
 
 - ``human_likeness``: 3-level pairwise (A / B / tie), every pair of NA, SysA, SysB, BL;
-- ``appropriateness``: 5-level pairwise matched vs mismatched (``X`` vs ``X_mismatched``);
+- ``appropriateness``: 5-level pairwise matched vs mismatched (``X`` vs ``X:mismatched``);
 - ``hl_rating``: MUSHRA page with the hidden reference (NA, role ``reference``) and an
   anchor (``Jitter``, role ``anchor``);
 - Likert statements on two scales (``naturalness``, ``engagement``);
@@ -73,7 +73,7 @@ def simulate_results(seed: int = 2024) -> pd.DataFrame:
                               [dict(question="human_likeness", condition_a=a, condition_b=b, segment=seg)]))
         for c in ["NA", "SysA", "SysB"]:
             for seg in SEGMENTS[:2]:
-                m = c + "_mismatched"
+                m = c + ":mismatched"
                 a, b = (c, m) if rng.random() < 0.5 else (m, c)
                 pages.append((f"app_{c}_{seg}", "pairwise",
                               [dict(question="appropriateness", condition_a=a, condition_b=b, segment=seg)]))
@@ -119,7 +119,7 @@ def simulate_results(seed: int = 2024) -> pd.DataFrame:
             for it in items:
                 it = dict(it)
                 if ptype == "pairwise":
-                    qa, qb = (QUALITY[c.replace("_mismatched", "")] - (1.2 if c.endswith("_mismatched") else 0)
+                    qa, qb = (QUALITY[c.replace(":mismatched", "")] - (1.2 if c.endswith(":mismatched") else 0)
                               if it["question"] == "appropriateness" else QUALITY[c]
                               for c in (it["condition_a"], it["condition_b"]))
                     it["answer"], it["strength"] = _pairwise_answer(
