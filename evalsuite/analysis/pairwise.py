@@ -100,6 +100,18 @@ def holm(pvalues) -> np.ndarray:
     return out
 
 
+def add_holm(table: pd.DataFrame, scope: str, alpha: float) -> None:
+    """Add ``p_holm`` and ``significant`` columns in place: one Holm family per study
+    (``scope="study"``) or per question (``scope="question"``)."""
+    if scope == "study":
+        table["p_holm"] = holm(table["p_value"])
+    else:
+        table["p_holm"] = np.nan
+        for _, idx in table.groupby("question").groups.items():
+            table.loc[idx, "p_holm"] = holm(table.loc[idx, "p_value"])
+    table["significant"] = table["p_holm"] < alpha
+
+
 def orient(pw: pd.DataFrame, order=None) -> pd.DataFrame:
     """Re-orient pairwise rows so ``condition_a`` comes first in ``order`` (default: sorted)."""
     conds = sorted(set(pw["condition_a"]) | set(pw["condition_b"]))
@@ -192,13 +204,7 @@ def pairwise_table(pw: pd.DataFrame, *, tie_policy: str = "exclude", ci_method: 
     table = pd.DataFrame(rows, columns=[c for c in cols if c not in ("p_holm", "significant")])
     if table.empty:
         return pd.DataFrame(columns=cols)
-    if holm_scope == "study":
-        table["p_holm"] = holm(table["p_value"])
-    else:
-        table["p_holm"] = np.nan
-        for _, idx in table.groupby("question").groups.items():
-            table.loc[idx, "p_holm"] = holm(table.loc[idx, "p_value"])
-    table["significant"] = table["p_holm"] < alpha
+    add_holm(table, holm_scope, alpha)
     return table[cols]
 
 

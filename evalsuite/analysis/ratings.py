@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from evalsuite.analysis.pairwise import holm
+from evalsuite.analysis.pairwise import add_holm
 
 RATINGS_COLUMNS = ["question", "condition", "role", "n", "n_participants", "median", "median_ci_low",
                    "median_ci_high", "median_ci_coverage", "mean", "mean_ci_low", "mean_ci_high", "sd", "note"]
@@ -142,13 +142,7 @@ def wilcoxon_pairs(mu: pd.DataFrame, *, zero_method: str = "wilcox", holm_scope:
                                         if c not in ("p_holm", "significant", "better")])
     if table.empty:
         return pd.DataFrame(columns=RATING_PAIRS_COLUMNS)
-    if holm_scope == "study":
-        table["p_holm"] = holm(table["p_value"])
-    else:
-        table["p_holm"] = np.nan
-        for _, idx in table.groupby("question").groups.items():
-            table.loc[idx, "p_holm"] = holm(table.loc[idx, "p_value"])
-    table["significant"] = table["p_holm"] < alpha
+    add_holm(table, holm_scope, alpha)
     direction = np.sign(table["rank_biserial"].fillna(0.0))
     table["better"] = np.where(~table["significant"], "",
                                np.where(direction > 0, table["condition_1"], table["condition_2"]))
