@@ -32,6 +32,20 @@ def _module_exists(name: str) -> bool:
         return importlib.util.find_spec(name) is not None
     except ModuleNotFoundError:  # a parent package is missing
         return False
+    except ImportError:  # present, but its optional extra is not: importing it says which
+        return True
+
+
+class _MissingExtraCommand(click.Command):
+    """Stands in for a command whose optional extra (e.g. torch) is missing: prints which, exit 1."""
+
+    def __init__(self, name: str, message: str):
+        super().__init__(name, help=message, short_help="(optional extra not installed)",
+                         context_settings={"ignore_unknown_options": True, "allow_extra_args": True})
+        self.message = message
+
+    def invoke(self, ctx):
+        raise click.ClickException(self.message)
 
 
 class LazyGroup(click.Group):
@@ -51,7 +65,13 @@ class LazyGroup(click.Group):
         module_name, attr = COMMANDS[name].split(":")
         if not _module_exists(module_name):
             return None
-        return getattr(importlib.import_module(module_name), attr)
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as exc:
+            if not isinstance(exc, InputError):  # a real bug, not a missing extra
+                raise
+            return _MissingExtraCommand(name, str(exc))
+        return getattr(module, attr)
 
     def invoke(self, ctx):
         try:

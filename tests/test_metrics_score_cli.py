@@ -2,7 +2,6 @@
 import json
 import shutil
 import sys
-import types
 
 import numpy as np
 import pandas as pd
@@ -275,28 +274,26 @@ def test_empty_and_missing_folders_and_bad_options(folders, tmp_path):
     assert res.exit_code == 1 and "unique" in res.output
 
 
-def test_fgd_option_reports_missing_extra_and_appends_rows(folders, tmp_path, monkeypatch):
+def test_fgd_option_reports_missing_extra(folders, tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "evalsuite.learned.fgd", None)
     res = run(["-r", folders["natural"], folders["jitter"], "-m", "kinematics", "--no-figures", "--fgd",
                tmp_path / "model.pt", "-o", tmp_path / "o"], ok=False)
     assert res.exit_code == 1 and "learned" in res.output and "Traceback" not in res.output
 
-    calls = {}
 
-    def score_fgd(model_path, reference, conditions):
-        calls["args"] = (model_path, sorted(reference), {c: sorted(m) for c, m in conditions.items()})
-        return [{"condition": c, "metric": "fgd", "value": 1.5, "unit": "feature units^2", "ci_low": 1.0,
-                 "ci_high": 2.0, "extractor_sha256": "abc"} for c in conditions]
-
-    fake = types.ModuleType("evalsuite.learned.fgd")
-    fake.score_fgd = score_fgd
-    monkeypatch.setitem(sys.modules, "evalsuite.learned.fgd", fake)
-    run(["-r", folders["natural"], folders["jitter"], "-m", "kinematics", "--no-figures", "--quiet", "--fgd",
-         tmp_path / "model.pt", "-o", tmp_path / "o2"])
+def test_fgd_option_scores_with_a_trained_model(folders, tmp_path):
+    """A real (tiny) encoder trained by `evalsuite fgd train`, then `evalsuite score --fgd`."""
+    model = tmp_path / "model.pt"
+    res = CliRunner().invoke(main, ["fgd", "train", str(folders["natural"]), "-o", str(model), "--joints", "all", "--window", "20",
+                                    "--epochs", "3", "--seed", "0", "--quiet"])
+    assert res.exit_code == 0, res.output
+    run(["-r", folders["natural"], folders["jitter"], folders["static"], "-m", "kinematics", "--no-figures",
+         "--quiet", "--fgd", model, "--bootstrap", "20", "-o", tmp_path / "o2"])
     summary = pd.read_csv(tmp_path / "o2" / "summary.csv")
-    assert _value(summary, "jitter", "fgd").value == 1.5
-    assert calls["args"][1] == ["seg00", "seg01", "seg02", "seg03"]
-    assert list(calls["args"][2]) == ["jitter"]
+    static, jitter = _value(summary, "static", "fgd"), _value(summary, "jitter", "fgd")
+    assert static.value > 0 and jitter.value >= 0
+    assert static.ci_low <= static.ci_high
+    assert not (summary.metric == "fgd_raw").any()  # raw-space FD only with --fgd-raw
 
 
 def test_demo_step_writes_condition_folders_and_scores_them(tmp_path):

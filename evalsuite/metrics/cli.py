@@ -8,7 +8,7 @@ import click
 from evalsuite.errors import InputError
 
 
-def _fgd_rows(result, model_path, fps, resample, bootstrap, seed, progress):
+def _fgd_rows(result, model_path, fps, resample, bootstrap, seed, progress, raw):
     """Rows from the learned FGD scorer (``evalsuite.learned.fgd.score_fgd``), imported only when asked."""
     try:
         from evalsuite.learned.fgd import score_fgd
@@ -24,12 +24,7 @@ def _fgd_rows(result, model_path, fps, resample, bootstrap, seed, progress):
         for s, info in result["files"][cond].items():
             motions[cond][s] = _load(info["path"], fps, resample)
     reference = motions.pop(plan.reference)
-    import inspect
-
-    params = inspect.signature(score_fgd).parameters
-    options = {k: v for k, v in (("n_bootstrap", bootstrap), ("seed", seed), ("progress", progress))
-               if k in params}  # this run's bootstrap settings, where the FGD scorer takes them
-    rows = score_fgd(model_path, reference, motions, **options)
+    rows = score_fgd(model_path, reference, motions, raw=raw, n_bootstrap=bootstrap, seed=seed, progress=progress)
     out = []
     for r in rows:
         r = dict(r)
@@ -75,9 +70,11 @@ def _fgd_rows(result, model_path, fps, resample, bootstrap, seed, progress):
 @click.option("--no-figures", is_flag=True, help="Skip the matplotlib figures.")
 @click.option("--fgd", "fgd_model", type=click.Path(path_type=pathlib.Path), default=None, metavar="MODEL",
               help="Also compute FGD with this trained feature extractor (needs the learned extra).")
+@click.option("--fgd-raw", is_flag=True, help="With --fgd, also the raw-space FD of whole windows (slow: one "
+              "eigendecomposition of window x pose dimensions per condition).")
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
 def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, sigma, fps, resample, speed_bins,
-          acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, quiet):
+          acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, quiet):
     """Score generated motion (CONDITIONS) against natural motion (--reference).
 
     Every folder holds one file per sequence; files are paired with the natural ones by name
@@ -99,7 +96,7 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
                            sigma=sigma, bootstrap=bootstrap, seed=seed, jobs=jobs, dask_address=dask_address,
                            strict=strict, progress=not quiet, figures=not no_figures)
     if fgd_model is not None:
-        result["summary"].extend(_fgd_rows(result, fgd_model, fps, resample, bootstrap, seed, not quiet))
+        result["summary"].extend(_fgd_rows(result, fgd_model, fps, resample, bootstrap, seed, not quiet, fgd_raw))
     paths = write_outputs(result, out_dir)
     figures = [] if no_figures else write_figures(result, out_dir / "figures")
     for issue in result["issues"]:
