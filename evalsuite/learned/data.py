@@ -6,6 +6,7 @@ import pathlib
 
 import numpy as np
 
+from evalsuite import hashing
 from evalsuite.errors import InputError
 from evalsuite.motion import Motion, load_motion
 from evalsuite.motion.io import MOTION_SUFFIXES
@@ -50,14 +51,11 @@ def load_folder(folder, *, convention: str | None = None, fps: float | None = No
 
 
 def file_sha256(path) -> str | None:
+    """The file's SHA-256, or None for motion that did not come from a file."""
     path = pathlib.Path(path) if path else None
     if path is None or not path.is_file():
         return None
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+    return hashing.file_sha256(path)
 
 
 def array_sha256(arr: np.ndarray) -> str:

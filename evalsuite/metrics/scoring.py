@@ -14,7 +14,6 @@
 """
 from __future__ import annotations
 
-import hashlib
 import os
 import pathlib
 import warnings
@@ -23,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from evalsuite.errors import InputError
+from evalsuite.hashing import file_sha256
 from evalsuite.metrics import beats as beats_mod
 from evalsuite.metrics.cca import cca_fit_moments, cca_score_moments
 from evalsuite.metrics.conventions import Convention, get_convention, reference_edges
@@ -284,14 +284,6 @@ def _load(path, fps=None, resample_fps=None):
     return motion
 
 
-def _sha256(path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
 def _selected_positions(motion, joints: list[str]) -> np.ndarray:
     index = {n: i for i, n in enumerate(motion.joint_names)}
     missing = [j for j in joints if j not in index]
@@ -429,7 +421,7 @@ def score_sequence(task) -> dict:
             if k == 0:
                 natural_pos = pos
             rec = _measure(motion, pos, setup, conv, natural_pos, onsets, setup.joints, natural_cache)
-            rec["sha256"] = _sha256(path)
+            rec["sha256"] = file_sha256(path)
             rec["path"] = str(path)
             if audio_error:
                 rec.setdefault("warnings", []).append(audio_error)
