@@ -1,0 +1,130 @@
+"""Benchmark: offscreen stick-figure video rendering vs the matplotlib-3D approach of the seed repos.
+
+Both render the same motion (the bundled MocapBank clip, 19 joints, 30 fps) as a single
+figure at 640x480 and encode H.264 with the same imageio-ffmpeg writer; the time covers
+rendering + encoding (+ building geometry), i.e. frames per second of finished video.
+
+The peer follows the gesture repos' scripts: a matplotlib 3D axes, cleared and re-plotted
+(one line per bone, joints as a scatter) every frame, drawn with Agg.
+
+Targets (issue 5): >= 6x the matplotlib peer and >= 2x real time at 30 fps (>= 60 fps).
+Each renderer runs ``--rounds`` times alternately; the best round counts (the machine is
+shared, so the best round is the least disturbed one).
+
+    python benchmarks/bench_render.py [--frames 300] [--rounds 2]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import tempfile
+import time
+
+import numpy as np
+
+from evalsuite.motion.io import load_motion
+from evalsuite.motion.ops import cut
+from evalsuite.motion.samples import sample_path
+from renderers.figure import LEFT, RIGHT, joint_sides
+from renderers.render import prepare_motions, render_video
+from renderers.scene import RenderSettings
+from renderers.video import VideoWriter
+
+W, H = 640, 480
+
+
+def ours(motion, out, msaa=4) -> float:
+    settings = RenderSettings(width=W, height=H, msaa=msaa)
+    t0 = time.perf_counter()
+    render_video([motion], out, settings)
+    return time.perf_counter() - t0
+
+
+def matplotlib_3d(motion, out, axes_visible: bool = True) -> float:
+    """The seed repos' renderer: matplotlib 3D, cleared and re-plotted every frame.
+
+    Follows the gesture repos' video scripts (e.g. Co-Speech_Gesture_Generation's
+    ``create_video_and_save``): one ``plot`` per bone with ``linewidth=5``, fixed axis limits,
+    axis labels and a per-frame title, Agg canvas; frames go to the same H.264 writer as ours.
+    ``axes_visible=False`` hides axes/labels/title (a faster variant those scripts do not use).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    pos = motion.positions()
+    parents = motion.parents
+    sides = joint_sides(motion.joint_names)
+    colors = np.where(sides == LEFT, "tab:blue", np.where(sides == RIGHT, "tab:orange", "dimgray"))
+    bones = [(j, p) for j, p in enumerate(parents) if p >= 0]
+    lo, hi = pos.reshape(-1, 3).min(axis=0), pos.reshape(-1, 3).max(axis=0)
+    t0 = time.perf_counter()
+    fig = plt.figure(figsize=(W / 100, H / 100), dpi=100)
+    ax = fig.add_subplot(111, projection="3d")
+    with VideoWriter(out, W, H, motion.fps) as writer:
+        for f in range(len(pos)):
+            ax.cla()
+            p = pos[f]
+            for j, par in bones:
+                # BVH is Y-up; matplotlib's 3D axes are Z-up
+                ax.plot([p[j, 0], p[par, 0]], [p[j, 2], p[par, 2]], [p[j, 1], p[par, 1]], color=colors[j],
+                        linewidth=5)
+            ax.set_xlim3d(lo[0], hi[0])
+            ax.set_ylim3d(lo[2], hi[2])
+            ax.set_zlim3d(lo[1], hi[1])
+            ax.view_init(elev=8, azim=-90)
+            if axes_visible:
+                ax.set_xlabel("x")
+                ax.set_ylabel("z")
+                ax.set_zlabel("y")
+                ax.set_title(f"natural ({f + 1}/{len(pos)})")
+            else:
+                ax.set_axis_off()
+            fig.canvas.draw()
+            frame = np.asarray(fig.canvas.buffer_rgba())[..., :3]
+            writer.write(frame)
+    plt.close(fig)
+    return time.perf_counter() - t0
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=300, help="frames to render (at 30 fps)")
+    ap.add_argument("--rounds", type=int, default=2)
+    args = ap.parse_args()
+    source = load_motion(sample_path("mocapbank"))
+    motion = prepare_motions([cut(source, 0.0, args.frames / source.fps)], RenderSettings(width=W, height=H))[0]
+    n = motion.n_frames
+    out = pathlib.Path(tempfile.mkdtemp(prefix="bench_render_"))
+    # warm-up: imports, shader compilation, font cache
+    ours(prepare_motions([cut(source, 0, 0.3)], RenderSettings())[0], out / "warm.mp4")
+    runs = {
+        "evalsuite (pyrender EGL, default)": lambda: ours(motion, out / "ours.mp4"),
+        "evalsuite (pyrender EGL, msaa 0)": lambda: ours(motion, out / "ours0.mp4", msaa=0),
+        "matplotlib 3D (seed repos)": lambda: matplotlib_3d(motion, out / "mpl.mp4"),
+        "matplotlib 3D, axes hidden": lambda: matplotlib_3d(motion, out / "mpl_off.mp4", axes_visible=False),
+    }
+    best = {name: np.inf for name in runs}
+    for _ in range(args.rounds):
+        for name, run in runs.items():
+            best[name] = min(best[name], run())
+    load = os.getloadavg()
+    print(f"Single figure, {W}x{H}, {n} frames ({n / motion.fps:.1f} s at {motion.fps:g} fps), "
+          f"render + H.264 encode; best of {args.rounds} rounds")
+    print(f"CPU: {os.cpu_count()} cores, load average {load[0]:.2f} / {load[1]:.2f} "
+          "(shared machine: other jobs may slow every figure)")
+    mpl = n / best["matplotlib 3D (seed repos)"]
+    print(f"{'renderer':36s} {'seconds':>8s} {'fps':>8s} {'x real time':>12s} {'x matplotlib':>13s}")
+    for name, secs in best.items():
+        fps = n / secs
+        print(f"{name:36s} {secs:8.2f} {fps:8.1f} {fps / motion.fps:12.2f} {fps / mpl:13.2f}")
+    fps = n / best["evalsuite (pyrender EGL, default)"]
+    print("default = 4x multisample anti-aliasing, joints as icospheres, one draw call per frame")
+    print(f"targets (default settings): >= 6x matplotlib: {'met' if fps / mpl >= 6 else 'NOT met'} ({fps / mpl:.1f}x); "
+          f">= 2x real time at 30 fps: {'met' if fps >= 60 else 'NOT met'} ({fps / 30:.2f}x)")
+
+
+if __name__ == "__main__":
+    main()

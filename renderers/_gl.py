@@ -1,0 +1,132 @@
+"""pyrender for offscreen rendering on a machine without a display or GPU.
+
+``PYOPENGL_PLATFORM`` must be set before OpenGL is first imported; we default it to
+``egl`` (Mesa's llvmpipe through EGL works with the PyOpenGL version pyrender pins) and
+respect a value the user set. Under ``osmesa`` (which needs PyOpenGL >= 3.1.4) pyrender's
+shader cache misses on every draw because the context key is a fresh ctypes object each
+call; the patch below keys it by the context's address instead.
+
+Also here: the cached offscreen contexts, our colour-only framebuffer read and the shader
+cache that draws meshes with the cheap ``shaders/stick.*`` program.
+"""
+from __future__ import annotations
+
+import atexit
+import contextlib
+import ctypes
+import os
+import pathlib
+import threading
+import types
+
+import numpy as np
+
+_PATCHED = False
+
+
+def import_pyrender():
+    """Return the ``pyrender`` module, configured for headless rendering."""
+    global _PATCHED
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    if os.environ["PYOPENGL_PLATFORM"] == "osmesa" and not _PATCHED:
+        import OpenGL.contextdata as contextdata
+
+        original = contextdata.getContext
+
+        def get_context(context=None):
+            ctx = original(context)
+            return ctx if isinstance(ctx, int) else ctypes.cast(ctx, ctypes.c_void_p).value
+
+        contextdata.getContext = get_context
+        _PATCHED = True
+    import pyrender
+    import pyrender.renderer
+
+    _install_samples_hook(pyrender.renderer)
+    return pyrender
+
+
+_SAMPLES = threading.local()
+
+
+def _install_samples_hook(module):
+    """pyrender hard-codes 4 MSAA samples; route its one call through a per-thread setting."""
+    original = module.glRenderbufferStorageMultisample
+    if getattr(original, "_evalsuite_hook", False):
+        return
+
+    def storage_multisample(target, samples, fmt, width, height):
+        return original(target, getattr(_SAMPLES, "value", samples), fmt, width, height)
+
+    storage_multisample._evalsuite_hook = True
+    module.glRenderbufferStorageMultisample = storage_multisample
+
+
+def set_samples(samples: int) -> None:
+    """MSAA samples for framebuffers pyrender creates next in this thread."""
+    _SAMPLES.value = int(samples)
+
+
+def _read_colour_only(self, scene, flags):
+    """Replacement for pyrender's framebuffer read: colour only (its depth read costs more
+    than drawing a stick figure)."""
+    from OpenGL import GL
+
+    width, height = self._main_fb_dims
+    GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self._main_fb_ms)
+    # Without multisampling the 'multisample' buffer is a plain one and is read directly
+    # (a blit on llvmpipe is a full-screen draw, ~2 ms at 640x480).
+    if getattr(self, "samples", 4) != 0:
+        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self._main_fb)
+        GL.glBlitFramebuffer(0, 0, width, height, 0, 0, width, height, GL.GL_COLOR_BUFFER_BIT, GL.GL_LINEAR)
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self._main_fb)
+    buf = GL.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
+    return np.frombuffer(buf, dtype=np.uint8).reshape(height, width, 3)[::-1], None
+
+
+_CONTEXTS: dict = {}
+SHADER_DIR = pathlib.Path(__file__).resolve().parent / "shaders"
+
+
+def _shader_cache(pr):
+    """pyrender's shader cache, but drawing meshes with our cheap Lambert/Blinn-Phong shader
+    (``shaders/stick.*``) unless ``full_shading`` is set (shadows need pyrender's PBR shader)."""
+
+    class StickShaderCache(pr.shader_program.ShaderProgramCache):
+        full_shading = False
+
+        def get_program(self, vertex_shader, fragment_shader, geometry_shader=None, defines=None):
+            if not self.full_shading and (vertex_shader, fragment_shader) == ("mesh.vert", "mesh.frag"):
+                vertex_shader = str(SHADER_DIR / "stick.vert")      # absolute: os.path.join keeps it
+                fragment_shader = str(SHADER_DIR / "stick.frag")
+            return super().get_program(vertex_shader, fragment_shader, geometry_shader, defines)
+
+    return StickShaderCache()
+
+
+def offscreen_renderer(pr, width: int, height: int, samples: int):
+    """A pyrender OffscreenRenderer per (thread, size, MSAA samples), reused across clips.
+
+    Creating one is cheap but deleting one runs a full garbage collection in pyrender
+    (about 0.2 s), which dominated short study clips; contexts are freed at exit instead.
+    """
+    # samples are part of the key: pyrender creates its framebuffers once per size
+    key = (threading.get_ident(), int(width), int(height), int(samples))
+    renderer = _CONTEXTS.get(key)
+    if renderer is None:
+        renderer = pr.OffscreenRenderer(width, height)
+        inner = renderer._renderer
+        inner._read_main_framebuffer = types.MethodType(_read_colour_only, inner)
+        inner._program_cache = _shader_cache(pr)
+        inner.samples = int(samples)
+        if not _CONTEXTS:
+            atexit.register(_free_contexts)
+        _CONTEXTS[key] = renderer
+    return renderer
+
+
+def _free_contexts():
+    for renderer in _CONTEXTS.values():
+        with contextlib.suppress(Exception):   # best effort while the interpreter shuts down
+            renderer.delete()
+    _CONTEXTS.clear()

@@ -1,0 +1,147 @@
+"""Render motions to MP4 videos and PNG stills: one figure, side by side, or a grid.
+
+Every panel of one video is seen through the same :class:`~renderers.scene.View`, so the
+conditions of a segment are framed identically (pass ``view=`` to share it across videos).
+"""
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+from tqdm import tqdm
+
+from evalsuite.errors import InputError
+from evalsuite.motion import Motion, load_motion
+from evalsuite.motion.ops import cut, resample
+from renderers.audio import read_audio
+from renderers.figure import FigureMesh
+from renderers.layout import Compositor
+from renderers.scene import FigureRenderer, RenderSettings, View, make_view
+from renderers.video import VideoWriter, fit_audio
+
+
+def prepare_motions(sources, settings: RenderSettings, start: float | None = None,
+                    end: float | None = None) -> list[Motion]:
+    """Load (paths) or take (Motion objects), cut to ``start``-``end`` s, bring to one fps.
+
+    The frame rate is ``settings.fps`` if set, else the first motion's; others are resampled
+    to it so the panels stay in step.
+    """
+    motions = [s if isinstance(s, Motion) else load_motion(s) for s in sources]
+    if not motions:
+        raise InputError("no motion given")
+    fps = settings.fps or motions[0].fps
+    # resample before cutting, so a cut of S seconds has S * fps frames whatever the source rate
+    motions = [resample(m, fps) for m in motions]
+    if start is not None or end is not None:
+        motions = [cut(m, start or 0.0, end) for m in motions]
+    if settings.center:
+        motions = [center_on_ground(m, settings.up_axis) for m in motions]
+    return motions
+
+
+def center_on_ground(motion: Motion, up_axis: str = "y") -> Motion:
+    """Shift the whole clip so the root's mean position is at the origin of the ground plane.
+
+    One constant shift per clip: movement within the clip (sway, steps) is kept, but clips
+    recorded at different places in the room line up under a shared camera.
+    """
+    from renderers.camera import UP_AXES
+
+    pos = motion.positions()
+    roots = np.flatnonzero(np.asarray(motion.parents) < 0)
+    root = int(roots[0]) if len(roots) else 0
+    up = UP_AXES[up_axis]
+    shift = np.nanmean(pos[:, root], axis=0)
+    shift = shift - np.dot(shift, up) * up
+    return motion.with_positions(pos - shift)
+
+
+def view_for(motions, settings: RenderSettings) -> View:
+    """The shared view of several motions (the conditions of one segment)."""
+    return make_view([m.positions() for m in motions], [m.joint_names for m in motions], settings,
+                     [m.parents for m in motions])
+
+
+def _meshes(motions, settings, view):
+    return [FigureMesh(m.joint_names, m.parents, settings.style, view.size, rest_positions=m.positions())
+            for m in motions]
+
+
+def render_video(motions, out, settings: RenderSettings | None = None, *, audio=None, captions=None,
+                 layout: str = "side", cols: int | None = None, view: View | None = None,
+                 frame_filter=None, progress: bool = False, label: str = "") -> dict:
+    """Render one or more motions (already at one fps) into an H.264 MP4.
+
+    Args:
+        motions: list of :class:`Motion` (see :func:`prepare_motions`).
+        out: output ``.mp4`` path.
+        audio: path of the speech audio, or ``(samples, rate)``; starts at frame 0 and is
+            trimmed with the video to the shorter of the two.
+        captions: one caption per panel (or None).
+        layout, cols: ``side`` (one row) or ``grid``; ``cols`` forces the column count.
+        view: the shared view; computed from ``motions`` when None.
+        frame_filter: ``f(index, frame) -> frame`` applied to every composed frame.
+
+    Returns:
+        dict with ``n_frames``, ``fps``, ``width``, ``height``, ``duration`` and ``view``.
+    """
+    settings = settings or RenderSettings()
+    fps = motions[0].fps
+    if any(abs(m.fps - fps) > 1e-9 * fps for m in motions):
+        raise InputError("motions have different frame rates; use prepare_motions to resample them")
+    view = view or view_for(motions, settings)
+    positions = [m.positions() for m in motions]
+    n = min(len(p) for p in positions)
+    if n < 1:
+        raise InputError("the motion has no frames")
+    audio_data = None
+    if audio is not None:
+        samples, rate = read_audio(audio) if not isinstance(audio, tuple) else audio
+        samples, n = fit_audio(samples, rate, n, fps, label=label or str(out))
+        audio_data = (samples, rate)
+    comp = Compositor(len(motions), settings.width, settings.height, layout=layout, cols=cols, captions=captions)
+    meshes = _meshes(motions, settings, view)
+    with FigureRenderer(view, settings) as renderer, \
+            VideoWriter(out, comp.width, comp.height, fps, audio=audio_data, crf=settings.crf) as writer:
+        streams = [renderer.frames(mesh, pos[:n]) for mesh, pos in zip(meshes, positions)]
+        for i, panels in enumerate(tqdm(zip(*streams), total=n, disable=not progress, unit="frame",
+                                        desc=label or pathlib.Path(out).name, leave=False)):
+            frame = comp.compose(panels)
+            if frame_filter is not None:
+                frame = frame_filter(i, frame)
+            writer.write(frame)
+    return {"n_frames": n, "fps": fps, "width": comp.width, "height": comp.height, "duration": n / fps,
+            "view": view}
+
+
+def render_frames(motions, settings: RenderSettings | None = None, *, frames=None, captions=None,
+                  layout: str = "side", cols: int | None = None, view: View | None = None) -> list[np.ndarray]:
+    """Composed frames (copies) at the given frame indices (default: frame 0)."""
+    settings = settings or RenderSettings()
+    view = view or view_for(motions, settings)
+    positions = [m.positions() for m in motions]
+    n = min(len(p) for p in positions)
+    idx = [0] if frames is None else [int(f) for f in frames]
+    for f in idx:
+        if not 0 <= f < n:
+            raise InputError(f"frame {f} is outside the motion (0-{n - 1})", field="frame")
+    comp = Compositor(len(motions), settings.width, settings.height, layout=layout, cols=cols, captions=captions)
+    meshes = _meshes(motions, settings, view)
+    out = []
+    with FigureRenderer(view, settings) as renderer:
+        for f in idx:
+            panels = [next(renderer.frames(mesh, pos[f:f + 1])).copy() for mesh, pos in zip(meshes, positions)]
+            out.append(comp.compose(panels).copy())
+    return out
+
+
+def render_still(motions, out, settings: RenderSettings | None = None, *, frame: int = 0, **kwargs) -> pathlib.Path:
+    """Write one composed frame as PNG."""
+    import imageio.v3 as iio
+
+    img = render_frames(motions, settings, frames=[frame], **kwargs)[0]
+    out = pathlib.Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    iio.imwrite(out, img)
+    return out

@@ -1,0 +1,334 @@
+"""Render settings, the shared view of a segment, and the offscreen pyrender renderer.
+
+A :class:`View` (camera, figure size, floor) is computed ONCE per segment from the motion
+of every condition of that segment, so all conditions are framed identically and drawn
+with the same thickness. :class:`FigureRenderer` renders frames offscreen through EGL (or
+whatever ``PYOPENGL_PLATFORM`` says) and reads back colour only.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from evalsuite.errors import InputError
+from renderers._gl import import_pyrender, offscreen_renderer, set_samples
+from renderers.camera import FRAMINGS, UP_AXES, VIEWS, Camera, _unit, frame_points, view_direction
+from renderers.figure import (FigureMesh, FigureStyle, body_size, forward_direction, head_index,
+                              head_marker_centres, leg_mask, srgb_to_linear)
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """Everything that decides how a clip looks (hashed to tell whether a video is up to date)."""
+
+    width: int = 640
+    height: int = 480
+    view: str = "front"
+    framing: str = "full"
+    fps: float | None = None          # None: the motion's own frame rate
+    up_axis: str = "y"
+    yfov_deg: float = 30.0
+    elevation_deg: float = 8.0
+    margin: float = 0.06
+    msaa: int = 4                     # multisample anti-aliasing samples (0, 2, 4, 8); 0 is fastest
+    crf: int = 20                     # H.264 quality (lower is better)
+    center: bool = True               # move each motion's mean root position to the origin (ground plane)
+    style: FigureStyle = field(default_factory=FigureStyle)
+
+    def __post_init__(self):
+        if not (isinstance(self.width, int) and isinstance(self.height, int)
+                and 16 <= self.width <= 7680 and 16 <= self.height <= 4320):
+            raise InputError(f"resolution {self.width}x{self.height}: expected integers from 16x16 to 7680x4320",
+                             field="resolution")
+        if self.width % 2 or self.height % 2:
+            raise InputError(f"resolution {self.width}x{self.height}: H.264 needs even width and height",
+                             field="resolution")
+        if self.view not in VIEWS:
+            raise InputError(f"unknown view {self.view!r}; expected one of {', '.join(VIEWS)}", field="view")
+        if self.framing not in FRAMINGS:
+            raise InputError(f"unknown framing {self.framing!r}; expected one of {', '.join(FRAMINGS)}",
+                             field="framing")
+        if self.up_axis not in UP_AXES:
+            raise InputError(f"unknown up axis {self.up_axis!r}; expected one of {', '.join(UP_AXES)}",
+                             field="up_axis")
+        if self.fps is not None and not (math.isfinite(self.fps) and self.fps > 0):
+            raise InputError(f"fps must be a positive number, got {self.fps!r}", field="fps")
+        if self.msaa not in (0, 2, 4, 8):
+            raise InputError(f"msaa must be 0, 2, 4 or 8, got {self.msaa!r}", field="msaa")
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["style"] = self.style.to_dict()
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "RenderSettings":
+        d = dict(d)
+        unknown = set(d) - set(cls.__dataclass_fields__)
+        if unknown:
+            raise InputError(f"unknown render setting(s) {', '.join(sorted(unknown))}; expected any of "
+                             f"{', '.join(cls.__dataclass_fields__)}", field="render")
+        style = d.pop("style", None)
+        if isinstance(style, dict):
+            unknown = set(style) - set(FigureStyle.__dataclass_fields__)
+            if unknown:
+                raise InputError(f"unknown style setting(s) {', '.join(sorted(unknown))}", field="render.style")
+            d["style"] = FigureStyle.from_dict(style)
+        elif isinstance(style, FigureStyle):
+            d["style"] = style
+        return cls(**d)
+
+
+@dataclass(frozen=True)
+class View:
+    """What the conditions of one segment share: camera, figure size and floor."""
+
+    camera: Camera
+    size: float
+    floor_height: float | None = None
+    floor_centre: tuple = (0.0, 0.0, 0.0)
+
+    def to_dict(self) -> dict:
+        return {"camera": self.camera.to_dict(), "size": float(self.size),
+                "floor_height": None if self.floor_height is None else float(self.floor_height),
+                "floor_centre": [float(x) for x in self.floor_centre]}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "View":
+        return cls(Camera.from_dict(d["camera"]), float(d["size"]), d["floor_height"], tuple(d["floor_centre"]))
+
+
+def _upper_mask(positions: np.ndarray, names, up: np.ndarray) -> np.ndarray:
+    legs = leg_mask(names)
+    if legs.any() and not legs.all():
+        return ~legs
+    # No recognisable leg names: keep joints in the upper ~55% of the mean pose's height.
+    heights = np.nanmean(positions @ up, axis=0)
+    lo, hi = float(np.nanmin(heights)), float(np.nanmax(heights))
+    return heights >= lo + 0.45 * (hi - lo)
+
+
+def make_view(position_sets, names_sets, settings: RenderSettings, parents_sets=None) -> View:
+    """The shared :class:`View` for several motions (the conditions of one segment).
+
+    Args:
+        position_sets: list of world positions ``(T, J, 3)``, one per condition.
+        names_sets: the joint names of each.
+        parents_sets: the parent indices of each (to place the head marker), optional.
+    """
+    if not position_sets:
+        raise InputError("no motion to frame")
+    up = UP_AXES[settings.up_axis]
+    size = float(np.median([body_size(p) for p in position_sets]))
+    forward = None
+    for pos, names in zip(position_sets, names_sets):
+        forward = forward_direction(pos, names, up)
+        if forward is not None:
+            break
+    if forward is None:
+        forward = np.array([0.0, 0.0, 1.0]) if settings.up_axis == "y" else np.array([0.0, -1.0, 0.0])
+    direction = view_direction(forward, settings.up_axis, settings.view, settings.elevation_deg)
+    style = settings.style
+    pts = []
+    for k, (pos, names) in enumerate(zip(position_sets, names_sets)):
+        pos = np.asarray(pos, float)
+        if style.head_marker:
+            head = head_index(names)
+            if head is not None:
+                parents = parents_sets[k] if parents_sets is not None else None
+                hp = int(parents[head]) if parents is not None else -1
+                centres = head_marker_centres(pos, head, hp, style.head_radius * size)
+                # the marker's extreme points along the world axes (it is much bigger than a joint)
+                r = style.head_radius * size
+                offsets = np.concatenate([np.eye(3), -np.eye(3)]) * r
+                pts.append((centres[:, None, :] + offsets[None]).reshape(-1, 3))
+        if settings.framing == "upper":
+            pos = pos[:, _upper_mask(pos, names, up)]
+        pts.append(pos.reshape(-1, 3))
+    pts = np.concatenate(pts)
+    pad = size * style.joint_radius * 1.2
+    camera = frame_points(pts, direction, settings.up_axis, settings.width, settings.height,
+                          yfov_deg=settings.yfov_deg, margin=settings.margin, pad=pad)
+    floor_height = None
+    centre = tuple(float(x) for x in np.nanmean(np.concatenate([p.reshape(-1, 3) for p in position_sets]), axis=0))
+    if style.floor:
+        all_pts = np.concatenate([np.asarray(p, float).reshape(-1, 3) for p in position_sets])
+        floor_height = float(np.nanmin(all_pts @ up)) - style.joint_radius * size
+    return View(camera, size, floor_height, centre)
+
+
+class FigureRenderer:
+    """Offscreen renderer of stick figures seen through one :class:`View`.
+
+    Use as a context manager (on exit the figures leave the scene; the GL context is kept
+    for the next renderer of the same size, see :func:`renderers._gl.offscreen_renderer`)::
+
+        with FigureRenderer(view, settings) as r:
+            for frame in r.frames(mesh, positions): ...
+    """
+
+    def __init__(self, view: View, settings: RenderSettings):
+        pr = import_pyrender()
+        self._pr = pr
+        self.view = view
+        self.settings = settings
+        style = settings.style
+        cam = view.camera
+        self.scene = pr.Scene(bg_color=[float(c) for c in style.background] + [1.0],
+                              ambient_light=[0.45, 0.45, 0.45])
+        self.scene.add(pr.PerspectiveCamera(yfov=math.radians(cam.yfov_deg), aspectRatio=cam.aspect,
+                                            znear=cam.znear, zfar=cam.zfar), pose=cam.pose())
+        # Key light from above and to the camera's left, so the figure has shape.
+        eye, target = np.asarray(cam.eye), np.asarray(cam.target)
+        dist = np.linalg.norm(eye - target)
+        cam_pose = cam.pose()
+        light_dir = _unit(cam_pose[:3, 2] + 0.6 * cam_pose[:3, 1] - 0.4 * cam_pose[:3, 0])
+        light_cam = Camera(tuple(target + light_dir * dist), tuple(target), cam.up, cam.yfov_deg,
+                           cam.width, cam.height, cam.znear, cam.zfar)
+        self.scene.add(pr.DirectionalLight(color=[1.0, 1.0, 1.0], intensity=2.6), pose=light_cam.pose())
+        # Bounds of everything the clip can show, set on our meshes instead of computed:
+        # vertices change per frame in place (so computed bounds would go stale), and
+        # pyrender computes mesh bounds with np.infty, which numpy 2 removed. The
+        # shadow-casting light frames its shadow map from these bounds.
+        centre = np.asarray(view.floor_centre, float)
+        self._bounds = np.stack([centre - 3.0 * view.size, centre + 3.0 * view.size])
+        if view.floor_height is not None:
+            floor = self._floor_mesh(view, settings)
+            floor._bounds = self._bounds
+            self.scene.add(floor)
+        self.material = pr.MetallicRoughnessMaterial(baseColorFactor=[1.0, 1.0, 1.0, 1.0], metallicFactor=0.0,
+                                                     roughnessFactor=0.7)
+        self._entries: dict = {}
+        self._renderer = offscreen_renderer(pr, cam.width, cam.height, settings.msaa)
+        self._clip = cam.projection() @ np.linalg.inv(cam.pose())   # world -> clip space
+        self.partial_redraw = True
+
+    def _floor_mesh(self, view: View, settings: RenderSettings):
+        pr = self._pr
+        up = UP_AXES[settings.up_axis]
+        a = _unit(np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0]))
+        b = np.cross(up, a)
+        half = 3.0 * view.size
+        c = np.asarray(view.floor_centre, float)
+        c = c - np.dot(c, up) * up + view.floor_height * up
+        corners = np.array([c - half * a - half * b, c + half * a - half * b,
+                            c + half * a + half * b, c - half * a + half * b])
+        faces = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
+        if np.dot(np.cross(corners[1] - corners[0], corners[2] - corners[0]), up) < 0:
+            faces = faces[:, ::-1].copy()
+        prim = pr.Primitive(positions=corners.astype(np.float32), normals=np.tile(up, (4, 1)).astype(np.float32),
+                            indices=faces, material=pr.MetallicRoughnessMaterial(
+                                baseColorFactor=list(srgb_to_linear(settings.style.floor_color)) + [1.0], metallicFactor=0.0,
+                                roughnessFactor=1.0))
+        return pr.Mesh([prim])
+
+    def render_vertices(self, vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray,
+                        colors: np.ndarray) -> np.ndarray:
+        """One frame ``(H, W, 3)`` uint8 of the given triangles (a read-only view; copy to keep).
+
+        The first call for a mesh (faces, vertex count) creates its GL buffers; later calls
+        only overwrite its vertex buffer in place (positions and normals change per frame,
+        faces and colours do not), which skips pyrender's per-mesh setup. Several meshes
+        (the panels of a comparison) stay in the scene; only the one drawn is visible.
+        """
+        pr = self._pr
+        key = (id(faces), len(vertices))
+        entry = self._entries.get(key)
+        if entry is None or not entry["prim"]._buffers:
+            if entry is not None:
+                self.scene.remove_node(entry["node"])
+            prim = pr.Primitive(positions=vertices, normals=normals, color_0=colors, indices=faces,
+                                material=self.material)
+            mesh = pr.Mesh([prim])
+            mesh._bounds = self._bounds   # see __init__: fixed, and pyrender's own needs numpy < 2
+            # (holding `faces` keeps its id, part of the key, from being reused meanwhile)
+            entry = {"node": self.scene.add(mesh), "prim": prim, "faces": faces,
+                     "rgba": np.asarray(prim.color_0, dtype=np.float32),   # pyrender stores RGBA
+                     "data": np.empty((len(vertices), 10), dtype=np.float32)}
+            self._entries[key] = entry
+        else:
+            from OpenGL import GL
+
+            data = entry["data"]
+            data[:, 0:3], data[:, 3:6], data[:, 6:10] = vertices, normals, entry["rgba"]
+            self._renderer._platform.make_current()
+            GL.glBindBuffer(GL.GL_ARRAY_BUFFER, entry["prim"]._buffers[0])
+            GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, data.nbytes, data)
+        # one figure per panel lives in the scene; only the one being drawn is visible
+        for other in self._entries.values():
+            other["node"].mesh.is_visible = other is entry
+        from OpenGL import GL
+
+        set_samples(self.settings.msaa)   # used if pyrender (re)creates its framebuffers now
+        flags = self._pr.RenderFlags.SHADOWS_DIRECTIONAL if self.settings.style.shadow else self._pr.RenderFlags.NONE
+        inner = self._renderer._renderer
+        inner._program_cache.full_shading = self.settings.style.shadow
+        scissor = self._scissor(inner, vertices)
+        try:
+            if scissor is not None:
+                self._renderer._platform.make_current()
+                GL.glEnable(GL.GL_SCISSOR_TEST)
+                GL.glScissor(*scissor)
+            color, _ = self._renderer.render(self.scene, flags)
+        finally:
+            if scissor is not None:
+                self._renderer._platform.make_current()
+                GL.glDisable(GL.GL_SCISSOR_TEST)
+                self._renderer._platform.make_uncurrent()
+        return color
+
+    def _scissor(self, inner, vertices):
+        """``(x, y, w, h)`` GL rectangle that needs redrawing, or None for the whole frame.
+
+        Without a floor, everything outside the figure's projected bounding box is plain
+        background, so only the union of this frame's and the previous frame's boxes (the
+        previous figure must be erased) is cleared, drawn and resolved; the rest of the
+        context's buffers already hold background. On a CPU rasteriser, clearing and
+        resolving the full multisampled frame cost more than drawing the figure.
+        """
+        cam = self.view.camera
+        w, h = cam.width, cam.height
+        background = tuple(self.settings.style.background)
+        rect = None
+        if self.partial_redraw and self.view.floor_height is None and not self.settings.style.shadow:
+            homo = vertices @ self._clip[:3, :3].T + self._clip[:3, 3]
+            wcoord = vertices @ self._clip[3, :3] + self._clip[3, 3]
+            if len(vertices) and np.all(wcoord > 1e-9):
+                ndc = homo[:, :2] / wcoord[:, None]
+                x0 = int(np.floor((ndc[:, 0].min() + 1.0) * 0.5 * w)) - 2
+                x1 = int(np.ceil((ndc[:, 0].max() + 1.0) * 0.5 * w)) + 2
+                y0 = int(np.floor((ndc[:, 1].min() + 1.0) * 0.5 * h)) - 2   # GL: rows from the bottom
+                y1 = int(np.ceil((ndc[:, 1].max() + 1.0) * 0.5 * h)) + 2
+                rect = (max(x0, 0), max(y0, 0), min(x1, w), min(y1, h))
+        previous = getattr(inner, "_evalsuite_dirty", None)
+        inner._evalsuite_dirty = ((0, 0, w, h) if rect is None else rect, background)
+        if rect is None or previous is None or previous[1] != background:
+            return None
+        p = previous[0]
+        x0, y0, x1, y1 = min(rect[0], p[0]), min(rect[1], p[1]), max(rect[2], p[2]), max(rect[3], p[3])
+        if x1 <= x0 or y1 <= y0:
+            x0 = y0 = x1 = y1 = 0
+        return (x0, y0, x1 - x0, y1 - y0)
+
+    def frames(self, mesh: FigureMesh, positions: np.ndarray, chunk: int = 64):
+        """Yield one frame per row of ``positions`` ``(T, J, 3)``."""
+        for start in range(0, len(positions), chunk):
+            verts, norms = mesh.vertices(positions[start:start + chunk])
+            for v, n in zip(verts, norms):
+                yield self.render_vertices(v, n, mesh.faces, mesh.colors)
+
+    def close(self):
+        # The GL context stays cached for the next renderer of this size (see
+        # _offscreen_renderer); only this scene's figure is let go.
+        for entry in self._entries.values():
+            self.scene.remove_node(entry["node"])
+        self._entries = {}
+        self._renderer = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

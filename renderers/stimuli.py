@@ -1,0 +1,368 @@
+"""Study stimuli in batch: every condition x segment, attention checks, blinded names, manifest.
+
+A YAML (or JSON) config says what to render (paths relative to the config file)::
+
+    output: stimuli                      # videos + manifest.csv go here
+    segments: [seg01, seg02]             # or {seg01: {start: 0, end: 8}, ...}
+    conditions:                          # name -> motion file; {segment} is filled in
+      natural: conditions/natural/{segment}.bvh
+      baseline: conditions/baseline/{segment}.bvh
+    audio: audio/{segment}.wav           # optional; muxed from frame 0
+    start: 0                             # optional cut (seconds) for every segment
+    end: 10
+    render: {width: 640, height: 480, view: front, framing: upper, fps: 30}
+    attention_checks:
+      - {check: instruction, segment: seg01, condition: natural,
+         text: "Attention: please rate this video 73", expected: "73", appear_s: 3}
+      - {check: distorted_audio, segment: seg02, condition: baseline, expected: bad}
+      - {check: distorted_video, segment: seg01, condition: baseline}
+
+Output names are blinded: ``v`` + 12 hex digits of an HMAC of the condition, segment and
+check under a secret key kept in ``<output>/.blinding-key`` (created on first run), so
+names are stable across runs but reveal nothing. ``manifest.csv`` maps them back; keep it
+(and the key) away from participants.
+
+A video is re-rendered only when its *input hash* changed: a SHA-256 over the motion and
+audio file contents, the render settings, the segment's shared camera, the cut and the
+renderer version, as recorded in the previous manifest (and the file's own SHA-256 still
+matches).
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+import hashlib
+import hmac
+import json
+import multiprocessing
+import os
+import pathlib
+import re
+import secrets
+import warnings
+
+import yaml
+from tqdm import tqdm
+
+from evalsuite.errors import InputError
+from evalsuite.hashing import file_sha256
+from renderers.attention import CHECKS, DEFAULT_TEXT
+
+# Part of every input hash: bump it when a change to the renderer changes how videos look.
+RENDERER_VERSION = "evalsuite-renderers-1"
+MANIFEST_COLUMNS = ["file", "condition", "segment", "kind", "expected", "sha256", "check", "source_file",
+                    "motion_segment", "text", "appear_s", "duration_s", "n_frames", "fps", "width", "height",
+                    "input_hash"]
+DEFAULT_EXPECTED = {"instruction": "73", "distorted_audio": "bad", "distorted_video": "bad"}
+_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+# ------------------------------------------------------------------------------- config
+
+def load_config(path) -> dict:
+    """Read and validate a stimuli config; returns it with absolute paths resolved."""
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise InputError("no such config file", path=path)
+    try:
+        raw = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise InputError(f"not valid YAML/JSON ({exc})", path=path) from None
+    if not isinstance(raw, dict):
+        raise InputError("expected a mapping at the top level", path=path)
+    known = {"output", "segments", "conditions", "audio", "start", "end", "render", "attention_checks", "layout"}
+    unknown = set(raw) - known
+    if unknown:
+        raise InputError(f"unknown key(s) {', '.join(sorted(unknown))}; expected any of {', '.join(sorted(known))}",
+                         path=path)
+    base = path.parent
+    cfg: dict = {"path": path, "base": base}
+    cfg["output"] = (base / str(raw.get("output", "stimuli"))).resolve()
+    segs = raw.get("segments")
+    if isinstance(segs, list):
+        segs = {str(s): {} for s in segs}
+    if not isinstance(segs, dict) or not segs:
+        raise InputError("expected a non-empty list or mapping of segment names", path=path, field="segments")
+    cfg["segments"] = {}
+    for name, opts in segs.items():
+        opts = opts or {}
+        if not isinstance(opts, dict):
+            raise InputError("expected a mapping (start, end, audio)", path=path, field=f"segments.{name}")
+        _check_name(name, path, f"segments.{name}")
+        cfg["segments"][str(name)] = {"start": opts.get("start", raw.get("start")),
+                                      "end": opts.get("end", raw.get("end")),
+                                      "audio": opts.get("audio", raw.get("audio"))}
+    conds = raw.get("conditions")
+    if not isinstance(conds, dict) or not conds:
+        raise InputError("expected a mapping condition name -> motion path pattern", path=path, field="conditions")
+    cfg["conditions"] = {}
+    for name, pattern in conds.items():
+        _check_name(name, path, f"conditions.{name}")
+        if not isinstance(pattern, str):
+            raise InputError("expected a path pattern such as 'motion/{segment}.bvh'", path=path,
+                             field=f"conditions.{name}")
+        cfg["conditions"][str(name)] = pattern
+    from renderers.scene import RenderSettings
+
+    try:
+        cfg["settings"] = RenderSettings.from_dict(raw.get("render") or {})
+    except TypeError as exc:
+        raise InputError(f"bad render settings ({exc})", path=path, field="render") from None
+    except InputError as exc:
+        raise InputError(exc.reason, path=path, field=f"render.{exc.field}" if exc.field else "render") from None
+    checks = raw.get("attention_checks") or []
+    if not isinstance(checks, list):
+        raise InputError("expected a list", path=path, field="attention_checks")
+    cfg["checks"] = []
+    for i, chk in enumerate(checks):
+        where = f"attention_checks[{i}]"
+        if not isinstance(chk, dict):
+            raise InputError("expected a mapping with check, segment, condition", path=path, field=where)
+        kind = chk.get("check")
+        if kind not in CHECKS:
+            raise InputError(f"expected check to be one of {', '.join(CHECKS)}, got {kind!r}", path=path,
+                             field=f"{where}.check")
+        seg = str(chk.get("segment", next(iter(cfg["segments"]))))
+        cond = str(chk.get("condition", next(iter(cfg["conditions"]))))
+        if seg not in cfg["segments"]:
+            raise InputError(f"unknown segment {seg!r}", path=path, field=f"{where}.segment")
+        if cond not in cfg["conditions"]:
+            raise InputError(f"unknown condition {cond!r}", path=path, field=f"{where}.condition")
+        text = str(chk.get("text", DEFAULT_TEXT)) if kind == "instruction" else ""
+        expected = str(chk.get("expected", _expected_from_text(text) if kind == "instruction"
+                               else DEFAULT_EXPECTED[kind]))
+        try:
+            appear = float(chk.get("appear_s", 3.0))
+        except (TypeError, ValueError):
+            raise InputError("expected a number of seconds", path=path, field=f"{where}.appear_s") from None
+        cfg["checks"].append({"check": kind, "segment": seg, "condition": cond, "text": text,
+                              "expected": expected, "appear_s": appear, "index": i})
+    return cfg
+
+
+def _expected_from_text(text: str) -> str:
+    """The answer an instruction asks for: its last number, or left/right if it names a side."""
+    nums = re.findall(r"\d+", text)
+    if nums:
+        return nums[-1]
+    low = text.lower()
+    for side in ("left", "right"):
+        if side in low:
+            return side
+    return DEFAULT_EXPECTED["instruction"]
+
+
+def _check_name(name, path, field):
+    if not isinstance(name, str) or not _NAME_RE.match(name):
+        raise InputError(f"expected a name of letters, digits, '_', '-' or '.', got {name!r}", path=path,
+                         field=field)
+
+
+def _resolve(base: pathlib.Path, pattern: str, segment: str) -> pathlib.Path:
+    try:
+        rel = pattern.format(segment=segment)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise InputError(f"bad path pattern {pattern!r} ({exc}); the only placeholder is {{segment}}") from None
+    return (base / rel).resolve()
+
+
+# ------------------------------------------------------------------------------- blinding
+
+def blinding_key(output: pathlib.Path) -> bytes:
+    """The secret key of this output folder (created on first use)."""
+    key_file = output / ".blinding-key"
+    if key_file.is_file():
+        return key_file.read_text().strip().encode()
+    output.mkdir(parents=True, exist_ok=True)
+    key = secrets.token_hex(32)
+    key_file.write_text(key + "\n")
+    return key.encode()
+
+
+def blinded_name(key: bytes, conditions, *parts: str) -> str:
+    """``v<12 hex>.mp4`` from an HMAC of ``parts``; never contains a condition name."""
+    banned = [c.lower() for c in conditions if len(c) >= 2]
+    for attempt in range(1000):
+        msg = "\x1f".join(parts + (str(attempt),)).encode()
+        stem = "v" + hmac.new(key, msg, hashlib.sha256).hexdigest()[:12]
+        if not any(b in stem for b in banned):
+            return stem + ".mp4"
+    raise InputError("could not find a blinded name free of condition names; rename the conditions")
+
+
+# ------------------------------------------------------------------------------- jobs
+
+def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
+    """Render jobs (one per condition x segment) and attention-check jobs, JSON-serialisable."""
+    from renderers.render import prepare_motions, view_for
+
+    settings = cfg["settings"]
+    out = cfg["output"]
+    key = blinding_key(out)
+    conds = list(cfg["conditions"])
+    render_jobs, by_pair = [], {}
+    for seg, opts in cfg["segments"].items():
+        paths = {c: _resolve(cfg["base"], cfg["conditions"][c], seg) for c in conds}
+        for c, p in paths.items():
+            if not p.is_file():
+                raise InputError(f"motion file of condition {c!r}, segment {seg!r} not found", path=p)
+        audio = _resolve(cfg["base"], opts["audio"], seg) if opts.get("audio") else None
+        if audio is not None and not audio.is_file():
+            raise InputError(f"audio of segment {seg!r} not found", path=audio)
+        motions = prepare_motions([paths[c] for c in conds], settings, opts["start"], opts["end"])
+        view = view_for(motions, settings).to_dict()   # shared by every condition of the segment
+        audio_hash = file_sha256(audio) if audio else ""
+        for c in conds:
+            file = blinded_name(key, conds, "stimulus", c, seg)
+            spec = {"kind": "render", "file": file, "out": str(out / file), "condition": c, "segment": seg,
+                    "motion": str(paths[c]), "audio": str(audio) if audio else None,
+                    "start": opts["start"], "end": opts["end"], "settings": settings.to_dict(), "view": view}
+            spec["input_hash"] = _hash({"v": RENDERER_VERSION, "motion": file_sha256(paths[c]), "audio": audio_hash,
+                                        "settings": spec["settings"], "view": view, "start": spec["start"],
+                                        "end": spec["end"]})
+            render_jobs.append(spec)
+            by_pair[(c, seg)] = spec
+    attention_jobs = []
+    for chk in cfg["checks"]:
+        src = by_pair[(chk["condition"], chk["segment"])]
+        file = blinded_name(key, conds, "attention", chk["check"], chk["condition"], chk["segment"],
+                            str(chk["index"]))
+        spec = {"kind": "attention", "file": file, "out": str(out / file), "src": src["out"],
+                "source_file": src["file"], "condition": chk["condition"], "segment": chk["segment"],
+                "check": chk["check"], "text": chk["text"], "expected": chk["expected"],
+                "appear_s": chk["appear_s"], "seed": chk["index"], "crf": settings.crf}
+        spec["input_hash"] = _hash({"v": RENDERER_VERSION, "src": src["input_hash"], "check": chk["check"],
+                                    "text": chk["text"], "appear_s": chk["appear_s"], "seed": chk["index"]})
+        attention_jobs.append(spec)
+    return render_jobs, attention_jobs
+
+
+def _hash(obj) -> str:
+    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def run_job(spec: dict) -> dict:
+    """Render one job (in any process: this is what --jobs and --dask workers run)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if spec["kind"] == "render":
+            from renderers.render import prepare_motions, render_video
+            from renderers.scene import RenderSettings, View
+
+            settings = RenderSettings.from_dict(spec["settings"])
+            motions = prepare_motions([spec["motion"]], settings, spec["start"], spec["end"])
+            info = render_video(motions, spec["out"], settings, audio=spec["audio"],
+                                view=View.from_dict(spec["view"]), label=f"{spec['condition']}/{spec['segment']}")
+            info.pop("view")
+        else:
+            from renderers.attention import make_attention_check
+
+            info = make_attention_check(spec["src"], spec["out"], spec["check"], text=spec["text"] or None,
+                                        appear_s=spec["appear_s"], seed=spec["seed"], crf=spec["crf"])
+    info["sha256"] = file_sha256(spec["out"])
+    info["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    return info
+
+
+# ------------------------------------------------------------------------------- manifest
+
+def read_manifest(path) -> dict[str, dict]:
+    """Rows of an existing manifest by file name (empty if there is none)."""
+    path = pathlib.Path(path)
+    if not path.is_file():
+        return {}
+    with open(path, newline="", encoding="utf-8") as f:
+        return {row["file"]: row for row in csv.DictReader(f) if row.get("file")}
+
+
+def _up_to_date(spec: dict, old: dict[str, dict]) -> bool:
+    row = old.get(spec["file"])
+    out = pathlib.Path(spec["out"])
+    return bool(row and row.get("input_hash") == spec["input_hash"] and out.is_file()
+                and row.get("sha256") == file_sha256(out))
+
+
+def _row(spec: dict, info: dict) -> dict:
+    att = spec["kind"] == "attention"
+    return {"file": spec["file"], "condition": spec["condition"], "segment": spec["segment"],
+            "kind": "attention" if att else "stimulus", "expected": spec.get("expected", "") if att else "",
+            "sha256": info["sha256"], "check": spec.get("check", ""), "source_file": spec.get("source_file", ""),
+            "motion_segment": "", "text": spec.get("text", ""),
+            "appear_s": "" if info.get("appear_s") is None else f"{info['appear_s']:.3f}",
+            "duration_s": f"{float(info['duration']):.4f}", "n_frames": int(info["n_frames"]),
+            "fps": f"{float(info['fps']):g}", "width": int(info["width"]), "height": int(info["height"]),
+            "input_hash": spec["input_hash"]}
+
+
+def write_manifest(path, rows: list[dict]) -> None:
+    path = pathlib.Path(path)
+    tmp = path.with_suffix(".csv.tmp")
+    with open(tmp, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=MANIFEST_COLUMNS)
+        w.writeheader()
+        w.writerows(rows)
+    os.replace(tmp, path)
+
+
+def _execute(specs, jobs: int, dask_address: str | None, desc: str):
+    """Run specs; yields (spec, info) as they finish, with a progress bar."""
+    if not specs:
+        return
+    bar = tqdm(total=len(specs), desc=desc, unit="video")
+    try:
+        if dask_address:
+            try:
+                from distributed import Client, as_completed
+            except ImportError:
+                raise InputError("--dask needs dask.distributed: pip install 'evalsuite[dask]'") from None
+            with Client(dask_address) as client:
+                futures = {client.submit(run_job, s, pure=False): s for s in specs}
+                for fut in as_completed(futures):
+                    yield futures[fut], fut.result()
+                    bar.update()
+        elif jobs > 1:
+            ctx = multiprocessing.get_context("spawn")   # each worker opens its own GL context
+            with cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+                futures = {pool.submit(run_job, s): s for s in specs}
+                for fut in cf.as_completed(futures):
+                    yield futures[fut], fut.result()
+                    bar.update()
+        else:
+            for s in specs:
+                yield s, run_job(s)
+                bar.update()
+    finally:
+        bar.close()
+
+
+def build_stimuli(config, *, jobs: int = 1, dask_address: str | None = None, force: bool = False,
+                  echo=print) -> dict:
+    """Render every condition x segment and the attention checks of ``config``; write the manifest.
+
+    Returns ``{"manifest": path, "rendered": n, "skipped": n, "rows": [...]}``.
+    """
+    cfg = load_config(config)
+    render_jobs, attention_jobs = plan(cfg)
+    manifest = cfg["output"] / "manifest.csv"
+    old = {} if force else read_manifest(manifest)
+    rows, rendered, skipped = {}, 0, 0
+    for phase, specs in (("stimuli", render_jobs), ("attention checks", attention_jobs)):
+        todo = []
+        for s in specs:
+            if _up_to_date(s, old):
+                rows[s["file"]] = old[s["file"]]
+                skipped += 1
+            else:
+                todo.append(s)
+        if len(todo) < len(specs):
+            echo(f"  {phase}: {len(specs) - len(todo)} of {len(specs)} videos are up to date")
+        for spec, info in _execute(todo, jobs, dask_address, phase):
+            for msg in info.pop("warnings", []):
+                tqdm.write(f"Warning: {msg}")
+            rows[spec["file"]] = _row(spec, info)
+            rendered += 1
+            # Written after every video, so an interrupted run resumes where it stopped.
+            write_manifest(manifest, [rows[s["file"]] for s in render_jobs + attention_jobs if s["file"] in rows])
+    ordered = [rows[s["file"]] for s in render_jobs + attention_jobs]
+    write_manifest(manifest, ordered)
+    return {"manifest": manifest, "rendered": rendered, "skipped": skipped, "rows": ordered}

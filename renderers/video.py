@@ -1,0 +1,149 @@
+"""H.264 MP4 writing with the ffmpeg that imageio-ffmpeg ships, audio muxing, and probing.
+
+Audio is aligned to frame 0 and cut to the video's exact length before muxing; when audio
+and motion lengths differ by more than one frame, the longer one is trimmed to the shorter
+and a :class:`DurationMismatchWarning` says so.
+"""
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import pathlib
+import re
+import subprocess
+import tempfile
+import warnings
+
+import numpy as np
+
+from evalsuite.errors import InputError
+from renderers.audio import fit_length, write_wav
+
+
+class DurationMismatchWarning(UserWarning):
+    """Audio and motion lengths differ by more than one video frame."""
+
+
+def fit_audio(samples: np.ndarray, rate: int, n_frames: int, fps: float, label: str = "") -> tuple[np.ndarray, int]:
+    """Align audio with ``n_frames`` of video: ``(samples cut to the video, frames to keep)``.
+
+    Both start at time 0. If the audio is shorter than the motion by more than one frame,
+    the video is cut to the audio; if longer, the audio is cut; either way with a warning.
+    Differences up to one frame are absorbed (audio cut or padded with silence).
+    """
+    motion_s = n_frames / fps
+    audio_s = len(samples) / rate
+    if abs(motion_s - audio_s) > 1.0 / fps:
+        warnings.warn(f"{label + ': ' if label else ''}audio lasts {audio_s:.3f} s but the motion "
+                      f"{motion_s:.3f} s ({n_frames} frames at {fps:g} fps); trimming to the shorter "
+                      f"({min(audio_s, motion_s):.3f} s)", DurationMismatchWarning, stacklevel=2)
+    keep = n_frames if audio_s >= motion_s - 1.0 / fps else int(math.floor(audio_s * fps + 1e-9))
+    if keep < 1:
+        raise InputError(f"audio of {audio_s:.3f} s is shorter than one frame")
+    return fit_length(samples, int(round(keep / fps * rate))), keep
+
+
+class VideoWriter:
+    """Write RGB frames to an H.264 MP4 (yuv420p, playable in every browser), audio optional.
+
+    Args:
+        path: output ``.mp4``.
+        width, height: frame size (even numbers).
+        fps: frame rate (any positive number; passed to ffmpeg as a fraction).
+        audio: ``(samples (n, ch) float32, rate)`` already aligned with the video, or None.
+        crf: x264 constant rate factor (18 = visually lossless, 23 = ffmpeg's default).
+    """
+
+    def __init__(self, path, width: int, height: int, fps: float, audio=None, crf: int = 20,
+                 preset: str = "veryfast"):
+        import imageio_ffmpeg
+
+        self.path = pathlib.Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.n_frames = 0
+        self._wav = None
+        audio_path = None
+        if audio is not None:
+            fd, self._wav = tempfile.mkstemp(suffix=".wav", dir=self.path.parent, prefix=".audio-")
+            os.close(fd)
+            write_wav(self._wav, audio[0], audio[1])
+            audio_path = self._wav
+        params = ["-preset", preset, "-crf", str(int(crf)), "-movflags", "+faststart"]
+        if audio is not None:
+            params += ["-b:a", "128k"]
+        self._gen = imageio_ffmpeg.write_frames(
+            str(self.path), (int(width), int(height)), fps=float(fps), codec="libx264", quality=None,
+            macro_block_size=2, pix_fmt_out="yuv420p", output_params=params, audio_path=audio_path,
+            audio_codec="aac" if audio is not None else None, ffmpeg_log_level="error")
+        self._gen.send(None)
+
+    def write(self, frame: np.ndarray) -> None:
+        self._gen.send(np.ascontiguousarray(frame, dtype=np.uint8))
+        self.n_frames += 1
+
+    def close(self) -> None:
+        if self._gen is not None:
+            self._gen.close()
+            self._gen = None
+        if self._wav is not None:
+            with contextlib.suppress(OSError):
+                os.remove(self._wav)
+            self._wav = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, *exc):
+        self.close()
+        if exc_type is not None:
+            with contextlib.suppress(OSError):
+                self.path.unlink()
+
+
+_DURATION_RE = re.compile(r"Duration:\s*(\d+):(\d+):([\d.]+)")
+_VIDEO_RE = re.compile(r"Stream #\S+.*?Video:\s*(\w+).*?(\d{2,5})x(\d{2,5})")
+_FPS_RE = re.compile(r"([\d.]+)\s*fps")
+_AUDIO_RE = re.compile(r"Stream #\S+.*?Audio:\s*(\w+).*?(\d+)\s*Hz")
+
+
+def probe(path) -> dict:
+    """What ``ffmpeg -i`` says about a media file: codecs, size, fps, container duration.
+
+    Keys: ``duration``, ``video_codec``, ``width``, ``height``, ``fps``, ``audio_codec``,
+    ``audio_rate`` (missing keys mean no such stream).
+    """
+    import imageio_ffmpeg
+
+    proc = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(path)],
+                          capture_output=True, text=True, errors="replace")
+    text = proc.stderr
+    info: dict = {}
+    m = _DURATION_RE.search(text)
+    if m:
+        info["duration"] = int(m.group(1)) * 3600 + int(m.group(2)) * 60 + float(m.group(3))
+    for line in text.splitlines():
+        v = _VIDEO_RE.search(line)
+        if v and "video_codec" not in info:
+            info["video_codec"], info["width"], info["height"] = v.group(1), int(v.group(2)), int(v.group(3))
+            f = _FPS_RE.search(line)
+            if f:
+                info["fps"] = float(f.group(1))
+        a = _AUDIO_RE.search(line)
+        if a and "audio_codec" not in info:
+            info["audio_codec"], info["audio_rate"] = a.group(1), int(a.group(2))
+    return info
+
+
+def read_video_frames(path):
+    """Iterate RGB frames ``(H, W, 3)`` uint8 of a video; returns also its size and fps first.
+
+    Yields ``(meta, frame)`` pairs where ``meta`` is imageio-ffmpeg's metadata dict.
+    """
+    import imageio_ffmpeg
+
+    gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
+    meta = next(gen)
+    w, h = meta["size"]
+    for raw in gen:
+        yield meta, np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)
