@@ -14,6 +14,10 @@ import click
 # (title, "module:function"), run in this order.
 STEPS = [
     ("Motion: load the bundled BVH samples and write world positions", "evalsuite.motion.demo:run"),
+    ("Score: build sample conditions and score them", "evalsuite.metrics.demo:run"),
+    ("Render: side-by-side comparison of the sample conditions", "renderers.demo:run"),
+    ("Study: build a small study from the sample stimuli and show how to serve it", "study_app.demo:run"),
+    ("Analysis: analyse a simulated results.csv", "evalsuite.analysis.demo:run"),
 ]
 
 

@@ -13,7 +13,7 @@ from study_app.errors import StudyDefinitionError
 
 TOKEN_RE = re.compile(r"^[A-Za-z0-9_-]{8,64}$")
 EVENT_KINDS = ("play", "pause", "seeked", "ended", "choice", "reload", "hidden", "visible", "resize")
-MAX_EVENTS = 500
+MAX_EVENTS = 2000
 
 
 class PayloadError(ValueError):

@@ -69,6 +69,7 @@ def create_app(config: dict) -> Flask:
     app.extensions["store"] = store
 
     csrf.init_app(app)
+    app.context_processor(lambda: {"study": study})
 
     from study_app.admin import bp as admin_bp
     from study_app.media import bp as media_bp

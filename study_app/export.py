@@ -45,8 +45,9 @@ def _condition(stim) -> str:
 def result_rows(study: Study, dump: dict) -> list[dict]:
     by_file = study.manifest.by_file()
     sessions = {s.id: s for s in dump["sessions"]}
+    order = {s.id: i for i, s in enumerate(dump["sessions"])}
     rows = []
-    for ans in dump["answers"]:
+    for ans in sorted(dump["answers"], key=lambda a: (order[a.session_id], a.page_index)):
         sess = sessions[ans.session_id]
         page = dump["plans"][sess.plan_id].pages[ans.page_index] if sess.plan_id in dump["plans"] else None
         if page is None or page["type"] not in ("pairwise", "mushra", "likert"):

@@ -19,7 +19,7 @@ bp = Blueprint("media", __name__)
 def video(sid, index, slot):
     _own(sid)
     study, store = current_app.extensions["study"], current_app.extensions["store"]
-    sess, pages, _ = store.load(sid)
+    sess, pages = store.read_session(sid)
     if sess is None or sess.status != "active" or not 0 <= index <= sess.current_page:
         abort(404)
     page = pages[index]

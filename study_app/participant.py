@@ -120,20 +120,17 @@ def start(study_id):
 def page(sid):
     _own(sid)
     study, store = _study(), _store()
-    sess, pages, answers = store.load(sid)
-    if sess is None:
+    loaded = store.view_current_page(sid)
+    if loaded is None:
         abort(404)
+    sess, pages, view, played = loaded
     if sess.status != "active":
         return _ended(sess)
     index = sess.current_page
     spec = pages[index]
-    view = store.page_view(sid, index)
-    done = {}
-    with store.Session() as db:
-        for kind in ("play", "ended"):
-            done[kind] = sorted(store.slots_with(db, sid, index, kind))
     data = _page_data(study, spec, index, len(pages), sid)
-    data.update(draft=view.draft or {}, played=done["play"], ended=done["ended"])
+    data.update(draft=view.draft or {}, played=sorted(s for s in played["play"] if s is not None),
+                ended=sorted(s for s in played["ended"] if s is not None))
     return render_template("page.html", study=study, spec=spec, data=data, page=_page_cfg(study, spec),
                            index=index, total=len(pages))
 
@@ -218,6 +215,9 @@ def answer(sid, index):
         if spec["type"] == "consent":
             width = body.get("width")
             if isinstance(width, int) and not isinstance(width, bool):
+                if width < study.min_width:
+                    raise PayloadError(f"please use a browser window at least {study.min_width} "
+                                       "pixels wide")
                 data["width"] = width
         data["_client_rt_ms"] = client_rt
         return data, score_attention(study, spec, data), events
@@ -266,8 +266,8 @@ def _check_draft(d, depth=0):
 def events(sid, index):
     _own(sid)
     store = _store()
-    sess, pages, _ = store.load(sid)
-    if sess is None or not 0 <= index < len(pages):
+    sess, pages = store.load(sid)
+    if sess is None or not 0 <= index <= min(sess.current_page, len(pages) - 1):
         abort(404)
     try:
         body = _json_body()

@@ -63,6 +63,19 @@ def write_clip(path, seed: int, seconds: float = 1.0, fps: int = 10, text: str |
     writer.close()
 
 
+def _attention_text(expected: str) -> str:
+    """The instruction an attention-check clip shows for its expected answer."""
+    if expected.isdigit():
+        return f"Attention!\nRate this video {expected}"
+    side, _, strength = expected.partition("_")
+    words = {"this": "Choose this video", "other": "Choose the other video",
+             "left": "Choose the left video", "right": "Choose the right video",
+             "equal": "Answer: they are equal"}
+    if side in words:
+        return "Attention!\n" + words[side] + (f" ({strength})" if strength else "")
+    return f"Attention!\nRate this video\n{expected}"
+
+
 def blinded_name(*parts) -> str:
     return hashlib.sha256("|".join(map(str, parts)).encode()).hexdigest()[:12] + ".mp4"
 
@@ -93,7 +106,7 @@ def make_sample_stimuli(folder, conditions, segments, *, mismatched=False,
                 seed += 1
     for k, (s, expected) in enumerate(attention):
         name = blinded_name(salt, "attention", s, expected, k)
-        write_clip(folder / name, 1000 + k, seconds, fps, text=f"Attention!\nanswer: {expected}")
+        write_clip(folder / name, 1000 + k, seconds, fps, text=_attention_text(expected))
         rows.append({"file": name, "condition": "", "segment": s, "kind": "attention",
                      "expected": expected})
     path = folder / "manifest.csv"

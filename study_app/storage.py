@@ -13,13 +13,12 @@ PostgreSQL by URL. Guarantees:
 from __future__ import annotations
 
 import datetime as dt
-import json
 import secrets
 import time
 
 from sqlalchemy import (JSON, Boolean, DateTime, Float, ForeignKey, Integer, String, Text,
-                        UniqueConstraint, create_engine, event, func, select, update)
-from sqlalchemy.exc import IntegrityError, OperationalError
+                        UniqueConstraint, create_engine, event, select)
+from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
 from study_app.design import plans_digest
@@ -141,7 +140,10 @@ def make_engine(url: str):
 
         @event.listens_for(engine, "begin")
         def _sqlite_begin(conn):
-            conn.exec_driver_sql("BEGIN IMMEDIATE")
+            # Writers queue for the lock up front; read-only work (video requests, exports)
+            # takes no lock at all under WAL.
+            readonly = conn.get_execution_options().get("evalsuite_readonly")
+            conn.exec_driver_sql("BEGIN" if readonly else "BEGIN IMMEDIATE")
     else:
         engine = create_engine(url, pool_pre_ping=True, pool_size=5, max_overflow=10)
     return engine
@@ -157,8 +159,10 @@ def init_db(engine, study, plans: dict):
         try:
             Base.metadata.create_all(engine)
             break
-        except (OperationalError, IntegrityError):
+        except (OperationalError, IntegrityError, ProgrammingError):
             # Several workers starting at once may race on CREATE TABLE; the loser retries.
+            if attempt == 4:
+                raise
             time.sleep(0.2 * (attempt + 1))
     digest = plans_digest(plans)
     Session = sessionmaker(engine)
@@ -186,6 +190,9 @@ class Store:
     def __init__(self, engine):
         self.engine = engine
         self.Session = sessionmaker(engine, expire_on_commit=False)
+        # For reads only: never writes, so on SQLite it does not take the write lock.
+        self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
+                                        expire_on_commit=False)
         self.is_postgres = engine.dialect.name == "postgresql"
 
     def _locked(self, stmt):
@@ -203,16 +210,6 @@ class Store:
                 sess.status, sess.end_reason, sess.updated_at = "expired", "reservation_expired", now
             plan.status, plan.session_id, plan.reserved_until = "free", None, None
             plan.times_released += 1
-
-    def find_session(self, study_id: str, participant: str):
-        with self.Session() as db:
-            return db.scalars(select(ParticipantSession).where(
-                ParticipantSession.study == study_id,
-                ParticipantSession.participant == participant)).first()
-
-    def get_session(self, session_id: str):
-        with self.Session() as db:
-            return db.get(ParticipantSession, session_id)
 
     def start_session(self, study, participant: str, platform: str, platform_data: dict,
                       user_agent: str):
@@ -262,27 +259,47 @@ class Store:
             self.release_expired(db, sess.study, now)
 
     def load(self, session_id: str):
-        """(session, plan pages, answers by page index) for a participant's session."""
+        """(session, plan pages) of a participant's session, or (None, None)."""
         now = utcnow()
         with self.Session.begin() as db:
             sess = db.get(ParticipantSession, session_id)
             if sess is None:
-                return None, None, {}
+                return None, None
             self._check_expiry(db, sess, now)
-            plan = db.get(Plan, sess.plan_id)
-            answers = {a.page_index: a for a in db.scalars(
-                select(Answer).where(Answer.session_id == session_id))}
-            return sess, plan.pages, answers
+            return sess, db.get(Plan, sess.plan_id).pages
 
-    def page_view(self, session_id: str, page_index: int):
-        """Record the first time a page is shown; return its row (with the autosaved draft)."""
+    def read_session(self, session_id: str):
+        """(session, plan pages) without touching reservations (read-only, no lock)."""
+        with self.ReadSession() as db:
+            sess = db.get(ParticipantSession, session_id)
+            if sess is None:
+                return None, None
+            return sess, db.get(Plan, sess.plan_id).pages
+
+    def view_current_page(self, session_id: str):
+        """One transaction for a page view: the session, its plan, the current page's first-view
+        record (created now if new, with the autosaved draft) and the slots already played /
+        played to the end. Returns None for an unknown session."""
+        now = utcnow()
         with self.Session.begin() as db:
-            view = db.scalars(select(PageView).where(PageView.session_id == session_id,
-                                                     PageView.page_index == page_index)).first()
-            if view is None:
-                view = PageView(session_id=session_id, page_index=page_index, shown_at=utcnow())
-                db.add(view)
-            return view
+            sess = db.get(ParticipantSession, session_id)
+            if sess is None:
+                return None
+            self._check_expiry(db, sess, now)
+            pages = db.get(Plan, sess.plan_id).pages
+            view, played = None, {"play": set(), "ended": set()}
+            if sess.status == "active":
+                index = sess.current_page
+                view = db.scalars(select(PageView).where(PageView.session_id == session_id,
+                                                         PageView.page_index == index)).first()
+                if view is None:
+                    view = PageView(session_id=session_id, page_index=index, shown_at=now)
+                    db.add(view)
+                for kind, slot in db.execute(select(Event.kind, Event.slot).where(
+                        Event.session_id == session_id, Event.page_index == index,
+                        Event.kind.in_(("play", "ended")))):
+                    played[kind].add(slot)
+            return sess, pages, view, played
 
     def save_draft(self, session_id: str, page_index: int, draft: dict) -> bool:
         with self.Session.begin() as db:
@@ -376,6 +393,12 @@ class Store:
             except IntegrityError:
                 # A concurrent duplicate (same token, or same page) won the race: re-read.
                 continue
+            except OperationalError:
+                # PostgreSQL deadlock victim (an expiring reservation at the same moment) or a
+                # SQLite lock timeout: nothing was written, try again.
+                if attempt == 2:
+                    raise
+                time.sleep(0.05)
         raise RuntimeError("could not store the answer")
 
     _reservation_minutes = 100.0
@@ -409,29 +432,14 @@ class Store:
     # --- admin / export -------------------------------------------------------------------
 
     def dump(self, study_id: str) -> dict:
-        with self.Session() as db:
+        with self.ReadSession() as db:
             sessions = db.scalars(select(ParticipantSession).where(
                 ParticipantSession.study == study_id).order_by(ParticipantSession.created_at)).all()
-            ids = [s.id for s in sessions]
             plans = {p.id: p for p in db.scalars(select(Plan).where(Plan.study == study_id))}
-            answers = db.scalars(select(Answer).where(Answer.session_id.in_(ids))
-                                 .order_by(Answer.session_id, Answer.page_index)).all() if ids else []
-            events = db.scalars(select(Event).where(Event.session_id.in_(ids))
-                                .order_by(Event.id)).all() if ids else []
+            of_study = ParticipantSession.study == study_id
+            answers = db.scalars(select(Answer).join(ParticipantSession, Answer.session_id == ParticipantSession.id)
+                                 .where(of_study).order_by(Answer.session_id, Answer.page_index)).all()
+            events = db.scalars(select(Event).join(ParticipantSession, Event.session_id == ParticipantSession.id)
+                                .where(of_study).order_by(Event.id)).all()
             return {"sessions": sessions, "plans": plans, "answers": answers, "events": events}
 
-    def progress(self, study_id: str) -> dict:
-        with self.Session() as db:
-            status_counts = dict(db.execute(select(ParticipantSession.status, func.count())
-                                            .where(ParticipantSession.study == study_id)
-                                            .group_by(ParticipantSession.status)).all())
-            plan_counts = dict(db.execute(select(Plan.status, func.count())
-                                          .where(Plan.study == study_id).group_by(Plan.status)).all())
-            n_answers = db.scalar(select(func.count()).select_from(Answer).join(
-                ParticipantSession, Answer.session_id == ParticipantSession.id).where(
-                ParticipantSession.study == study_id))
-            return {"sessions": status_counts, "plans": plan_counts, "answers": n_answers}
-
-
-def to_json(obj) -> str:
-    return json.dumps(obj, sort_keys=True, default=str)

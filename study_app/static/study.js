@@ -16,6 +16,7 @@
   var done = new Set();
   var touched = new Set();
   var busy = false;
+  var MAX_BATCH = 1500;  // the server takes at most 2000 events per request
 
   function rid() {
     var a = new Uint8Array(12);
@@ -33,7 +34,7 @@
   }
   function flush() {
     if (!queue.length) return Promise.resolve();
-    var batch = queue; queue = [];
+    var batch = queue.splice(0, MAX_BATCH);
     return post(data.events_url, {events: batch}).then(function (r) {
       if (!r.ok && r.status >= 500) queue = batch.concat(queue);
     }, function () { queue = batch.concat(queue); });
@@ -208,7 +209,7 @@
     msg.textContent = "Saving…";
     var token = sessionStorage.getItem(tokenKey);
     if (!token) { token = rid(); sessionStorage.setItem(tokenKey, token); }
-    var events = queue; queue = [];
+    var events = queue.splice(0, MAX_BATCH);
     var body = {token: token, answer: collect(), events: events,
                 client_rt_ms: Math.round(performance.now() - shownAt)};
     if (data.type === "consent") body.width = window.innerWidth;

@@ -1,0 +1,278 @@
+"""End to end in a real browser: headless Debian Chromium (Playwright) against a real server.
+
+A participant arrives from Prolific, goes through consent, questionnaire, training, pairwise,
+MUSHRA, 5-level pairwise and Likert pages playing every video, passes one attention check and
+fails another, reloads mid-study (and the server restarts) and resumes, finishes and gets the
+completion code; a second entry with the same ID cannot start over; a second participant
+fails two checks and gets the failure code; the admin export holds exactly the answers given.
+Screenshots go to $STUDY_SCREENSHOTS (or the test's tmp dir).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import pathlib
+import re
+import threading
+import urllib.request
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from werkzeug.serving import make_server
+
+import study_helpers as h
+from study_app import create_app
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
+        "--disable-component-update", "--no-first-run", "--disable-dev-shm-usage",
+        "--autoplay-policy=no-user-gesture-required"]
+
+
+class Server:
+    """The app on a real HTTP server thread on 127.0.0.1 (restartable on the same port)."""
+
+    def __init__(self, make_app, port=0):
+        self.make_app = make_app
+        self.app = make_app()
+        self.httpd = make_server("127.0.0.1", port, self.app, threaded=True)
+        self.port = self.httpd.server_port
+        self.thread = threading.Thread(target=self.httpd.serve_forever, daemon=True)
+        self.thread.start()
+
+    @property
+    def url(self):
+        return f"http://127.0.0.1:{self.port}"
+
+    def stop(self):
+        self.httpd.shutdown()
+        self.httpd.server_close()
+        self.thread.join(10)
+
+    def restart(self):
+        self.stop()
+        return Server(self.make_app, self.port)
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("browser")
+    h.make_study(folder, sessions=4, seconds=0.5)
+    shots = pathlib.Path(os.environ.get("STUDY_SCREENSHOTS") or folder / "screens")
+    shots.mkdir(parents=True, exist_ok=True)
+    db = f"sqlite:///{folder / 'study.db'}"
+
+    def make_app():
+        return create_app({"STUDY": str(folder / "study.yaml"), "DATABASE_URL": db,
+                           "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN,
+                           "SESSION_COOKIE_SECURE": False, "INSTANCE_PATH": str(folder / "inst")})
+    server = Server(make_app)
+    from playwright.sync_api import sync_playwright
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        ns = SimpleNamespace(folder=folder, shots=shots, server=server, browser=browser)
+        yield ns
+        browser.close()
+    ns.server.stop()
+
+
+class Driver:
+    """Answers the study like a person would, recording every acknowledged answer."""
+
+    def __init__(self, env, pid):
+        self.env, self.pid = env, pid
+        self.context = env.browser.new_context(viewport={"width": 1280, "height": 900})
+        self.page = self.context.new_page()
+        self.page.set_default_timeout(20000)
+        self.sent = []
+        self.sid = None
+        self.rng = np.random.default_rng(abs(hash(pid)) % 2**32)
+        self.shot_names = []
+        # Everything the participant's browser received, for the leak check.
+        self.seen_urls, self.seen_bodies = [], []
+        self.page.on("request", lambda req: self.seen_urls.append(req.url))
+        self.page.route(re.compile(r".*/s/[^/]+/(answer|draft|events)/\d+$"), self._record)
+
+    def _record(self, route):
+        """Pass the JSON API calls through, keeping a copy of each response body."""
+        response = route.fetch()
+        self.seen_bodies.append(response.text())
+        route.fulfill(response=response)
+
+    def shot(self, name):
+        path = self.env.shots / f"{self.pid}-{len(self.shot_names):02d}-{name}.png"
+        self.page.screenshot(path=str(path), full_page=True)
+        self.shot_names.append(path)
+
+    def data(self):
+        return json.loads(self.page.locator("#page-data").text_content())
+
+    def plan(self):
+        return h.plan_pages(self.env.server.app, self.sid)
+
+    def play_all(self):
+        n = self.page.locator("video[data-slot]").count()
+        for k in range(n):
+            status = self.page.locator(f".status[data-slot='{k}']")
+            if "ok" in (status.get_attribute("class") or ""):
+                continue
+            self.page.click(f"button.play[data-slot='{k}']")
+            self.page.wait_for_selector(f".status[data-slot='{k}'].ok")
+
+    def next(self):
+        before = self.page.url, self.data()["index"]
+        self.page.wait_for_selector("#next:not([disabled])")
+        with self.page.expect_navigation():
+            with self.page.expect_response(lambda r: "/answer/" in r.url) as resp:
+                self.page.click("#next")
+        assert resp.value.status == 200
+        return before
+
+    def answer_page(self, pass_check=True, screenshot=False, before_next=None):
+        self.seen_bodies.append(self.page.content())
+        data = self.data()
+        spec = self.plan()[data["index"]]
+        study = self.env.server.app.extensions["study"]
+        answer = h.make_answer(study, spec, self.rng, pass_check=pass_check)
+        t = spec["type"]
+        if t == "consent":
+            self.page.check("#agree")
+        elif t == "questionnaire":
+            self.page.fill("#q-age", str(answer["age"]))
+            self.page.select_option("#q-gender", answer["gender"])
+            self.page.fill("#q-comments", answer["comments"])
+        elif t in ("pairwise", "mushra", "likert"):
+            self.play_all()
+        if t == "pairwise":
+            for q, v in answer["choices"].items():
+                self.page.check(f"input[name='q-{q}'][value='{v}']")
+            for r in answer["reasons"]:
+                self.page.check(f"input[name='reason'][value='{r}']")
+        elif t == "mushra":
+            for k, v in enumerate(answer["ratings"]):
+                self.set_slider(k, v)
+        elif t == "likert":
+            for sid, v in answer["ratings"].items():
+                self.page.check(f"input[name='s-{sid}'][value='{v}']")
+        if screenshot:
+            self.shot(spec["page"])
+        if before_next:
+            before_next(answer)
+        self.next()
+        self.sent.append((data["index"], answer))
+        return spec
+
+    def set_slider(self, k, v):
+        self.page.eval_on_selector(
+            f"input[name='rating-{k}']",
+            "(el, v) => { el.value = String(v); el.dispatchEvent(new Event('input', {bubbles: true})); }", v)
+
+    def enter(self):
+        self.page.goto(self.env.server.url + h.prolific_url(self.pid))
+        if "/s/" in self.page.url:
+            self.sid = self.page.url.split("/s/")[1].strip("/")
+
+
+def test_participant_journey_in_chromium(env):
+    d = Driver(env, "5f3a1c9e8b7d6a5f4e3d2c1b")
+    d.enter()
+    d.shot("consent")
+    seen_types, seen_blocks, checks = set(), set(), []
+    reloaded = False
+    while d.page.locator("#page-data").count():
+        data = d.data()
+        spec = d.plan()[data["index"]]
+        if spec["type"] == "mushra" and not spec.get("check") and not reloaded:
+            # Mid-study: watch the videos, move two sliders, wait for the autosave, then the
+            # page is reloaded while the server restarts; everything must come back.
+            d.play_all()
+            with d.page.expect_response(lambda r: "/draft/" in r.url):
+                d.set_slider(0, 33)
+                d.set_slider(1, 77)
+            d.shot("mushra-before-reload")
+            env.server = env.server.restart()
+            d.page.reload()
+            assert d.data()["index"] == data["index"]
+            assert d.page.input_value("input[name='rating-0']") == "33"
+            assert d.page.input_value("input[name='rating-1']") == "77"
+            n = len(spec["slots"])
+            for k in range(n):
+                assert "ok" in d.page.locator(f".status[data-slot='{k}']").get_attribute("class")
+            d.shot("mushra-after-reload")
+            reloaded = True
+        if spec.get("check"):
+            checks.append(spec["type"])
+        # pass the pairwise attention check, fail the MUSHRA one (one failure is allowed)
+        d.answer_page(pass_check=spec["type"] != "mushra",
+                      screenshot=spec.get("block", spec["type"]) not in seen_blocks or spec.get("check"))
+        seen_types.add(spec["type"])
+        seen_blocks.add(spec.get("block", spec["type"]))
+    assert reloaded and checks == ["pairwise", "mushra"]
+    assert seen_types >= {"consent", "questionnaire", "instructions", "pairwise", "mushra", "likert"}
+    d.shot("finish")
+    assert d.page.locator("#completion-code").text_content() == "DONE1234"
+    assert d.page.get_attribute("#return-link", "href") == \
+        "https://app.prolific.com/submissions/complete?cc=DONE1234"
+
+    # the same Prolific ID again, in a fresh browser: cannot start over
+    again = Driver(env, d.pid)
+    again.enter()
+    assert again.sid is None and "already completed" in again.page.content()
+    again.shot("second-entry")
+
+    # a second participant fails two attention checks and gets the failure code
+    f = Driver(env, "6a4b2c0d9e8f7a6b5c4d3e2f")
+    f.enter()
+    while f.page.locator("#page-data").count():
+        spec = f.plan()[f.data()["index"]]
+        f.answer_page(pass_check=False)
+    f.shot("failed")
+    assert f.page.locator("#failure-code").text_content() == "FAIL5678"
+
+    # nothing the participants' browsers received names a condition or a stimulus file
+    study = env.server.app.extensions["study"]
+    hidden = set(study.conditions) | {s.file for s in study.manifest.stimuli}
+    for drv in (d, f):
+        drv.seen_bodies.append(drv.page.content())
+        for text in drv.seen_urls + drv.seen_bodies:
+            assert not any(x.lower() in text.lower() for x in hidden), text[:200]
+    assert sum(len(drv.seen_urls) for drv in (d, f)) > 50
+
+    # the admin export contains exactly the answers given
+    req = urllib.request.Request(env.server.url + "/admin/export/results.csv",
+                                 headers={"Authorization": f"Bearer {h.ADMIN}"})
+    rows = list(csv.DictReader(io.StringIO(urllib.request.urlopen(req).read().decode())))
+    keys = h.as_keys(rows)
+    assert len(keys) == len(set(keys))
+    assert set(keys) == h.expected_rows(env.server.app, [d, f])
+    raw = json.loads(urllib.request.urlopen(urllib.request.Request(
+        env.server.url + "/admin/export/raw.json", headers={"Authorization": f"Bearer {h.ADMIN}"})).read())
+    kinds = {e["kind"] for e in raw["events"]}
+    assert {"play", "ended"} <= kinds
+
+    # admin pages in the browser (login form with CSRF)
+    admin = env.browser.new_page(viewport={"width": 1280, "height": 900})
+    admin.goto(env.server.url + "/admin/")
+    admin.fill("input[name=token]", h.ADMIN)
+    admin.click("button[type=submit]")
+    admin.wait_for_selector("#sessions")
+    admin.screenshot(path=str(env.shots / "admin.png"), full_page=True)
+    assert "6a4b2c0d9e8f7a6b5c4d3e2f" in admin.content()
+
+
+def test_narrow_window_is_gated(env):
+    d = Driver(env, "7b5c3d1e0f9a8b7c6d5e4f3a")
+    d.page.set_viewport_size({"width": 600, "height": 800})
+    d.enter()
+    assert d.page.is_visible("#gate")
+    # the overlay covers the page: nothing can be clicked; ticking the box by script does not
+    # unlock Next either
+    d.page.eval_on_selector("#agree", "el => { el.checked = true; el.dispatchEvent(new Event('input', {bubbles: true})); }")
+    assert d.page.is_disabled("#next")
+    d.shot("narrow-gate")
+    d.page.set_viewport_size({"width": 1200, "height": 800})
+    d.page.wait_for_selector("#gate", state="hidden")
+    assert d.page.is_enabled("#next")
