@@ -23,8 +23,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 from statsmodels.stats.anova import AnovaRM
-from statsmodels.stats.multitest import multipletests
 
+from evalsuite.analysis.pairwise import adjust_pvalues
 from evalsuite.analysis.ratings import mean_ci
 
 UNIT = ["participant", "session", "page", "condition"]
@@ -47,12 +47,7 @@ def cronbach_alpha(items) -> float:
 
 
 def _bonferroni(p):
-    p = np.asarray(p, dtype=float)
-    out = np.full(p.shape, np.nan)
-    ok = np.isfinite(p)
-    if ok.any():
-        out[ok] = multipletests(p[ok], method="bonferroni")[1]
-    return out
+    return adjust_pvalues(p, "bonferroni")
 
 
 def likert_tables(lk: pd.DataFrame, alpha: float = 0.05) -> dict:

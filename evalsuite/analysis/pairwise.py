@@ -87,17 +87,23 @@ def binomial_p(k: int, n: int, p: float = 0.5) -> float:
     return float(stats.binomtest(int(k), int(n), p, alternative="two-sided").pvalue)
 
 
+def adjust_pvalues(pvalues, method: str) -> np.ndarray:
+    """Multiplicity-adjusted p-values (statsmodels ``method``, named explicitly: its default is
+    Holm-Sidak); NaN entries stay NaN and are not counted in the family."""
+    p = np.asarray(pvalues, dtype=float)
+    out = np.full(p.shape, np.nan)
+    ok = np.isfinite(p)
+    if ok.any():
+        out[ok] = multipletests(p[ok], method=method)[1]
+    return out
+
+
 def holm(pvalues) -> np.ndarray:
     """Holm-Bonferroni adjusted p-values; NaN entries stay NaN and are not in the family.
 
     Step-down: sort the m p-values ascending, ``p_adj(i) = max_{j<=i} min(1, (m-j+1) p(j))``.
     """
-    p = np.asarray(pvalues, dtype=float)
-    out = np.full(p.shape, np.nan)
-    ok = np.isfinite(p)
-    if ok.any():
-        out[ok] = multipletests(p[ok], method="holm")[1]
-    return out
+    return adjust_pvalues(pvalues, "holm")
 
 
 def add_holm(table: pd.DataFrame, scope: str, alpha: float) -> None:
