@@ -85,8 +85,7 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
     end_offsets: list[tuple[float, float, float]] = []
     name_lines: dict[str, int] = {}
 
-    def offset(owner: str):
-        tokens.expect("OFFSET")
+    def offset_values(owner: str):
         return tuple(tokens.number(f"OFFSET {axis} of {owner}") for axis in "xyz")
 
     def joint(parent: int, keyword_line: int):
@@ -114,8 +113,7 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
             if word == "OFFSET":
                 if seen_offset:
                     raise tokens.error(f"joint {name!r} has a second OFFSET", line)
-                tokens.pos -= 1
-                offsets[index] = offset(f"joint {name!r}")
+                offsets[index] = offset_values(f"joint {name!r}")
                 seen_offset = True
             elif word == "CHANNELS":
                 if seen_channels:
@@ -142,12 +140,12 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
             elif word == "JOINT":
                 joint(index, line)
             elif word == "END":
-                site_line = tokens.expect("Site")
+                tokens.expect("Site")
                 tokens.expect("{")
-                end_offsets.append(offset(f"the End Site of {name!r}"))
+                tokens.expect("OFFSET")
+                end_offsets.append(offset_values(f"the End Site of {name!r}"))
                 end_parents.append(index)
                 tokens.expect("}")
-                del site_line
             elif tok == "}":
                 if not seen_offset:
                     raise tokens.error(f"joint {name!r} has no OFFSET; expected 'OFFSET x y z'", line)

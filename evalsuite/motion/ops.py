@@ -119,9 +119,7 @@ def resample(motion: Motion, fps: float) -> Motion:
         if len(axes) == 3 and len(set(axes)) == 3:
             quats = Rotation.from_matrix(elements_to_array(local[j], (motion.n_frames,))).as_quat()
             q = quaternion_slerp(quats[i0], quats[i1], w)
-            euler = Rotation.from_quat(q).as_euler(axes, degrees=True)
-            # Keep angles continuous with the source where the frames coincide.
-            out[:, cols] = euler
+            out[:, cols] = Rotation.from_quat(q).as_euler(axes, degrees=True)
         elif cols:
             unwrapped = np.unwrap(values[:, cols], period=360.0, axis=0)
             out[:, cols] = unwrapped[i0] * (1 - w)[:, None] + unwrapped[i1] * w[:, None]
