@@ -173,6 +173,22 @@ def test_bad_input_raises_one_clear_error(case, tmp_path):
     assert isinstance(info.value, ValueError)
 
 
+@pytest.mark.parametrize("sep", [" ", "\t", "  "])
+def test_compensating_value_counts_are_caught(sep, tmp_path):
+    """One frame line with a value too many and the next with one too few: same total, still an error."""
+    head, _, _ = GOOD.partition("MOTION")
+    n_ch = parse_bvh(GOOD)[0].n_channels
+    rows = [[f"{(r * n_ch + c) % 97}.5" for c in range(n_ch)] for r in range(3)]
+    rows[0].append("1.0")
+    rows[1].pop()
+    text = head + "MOTION\nFrames: 3\nFrame Time: 0.04\n" + "\n".join(sep.join(r) for r in rows) + "\n"
+    path = tmp_path / "shifted.bvh"
+    path.write_text(text)
+    with pytest.raises(BVHError, match=f"frame 0 has {n_ch + 1} values; expected {n_ch}") as info:
+        evalsuite.load_motion(path)
+    assert info.value.line == head.count("\n") + 4
+
+
 def test_error_names_the_line_and_channel(tmp_path):
     lines = GOOD.splitlines()
     last = len(lines)

@@ -231,6 +231,8 @@ def _frames_fast(body: bytes, n_frames: int, n_ch: int) -> np.ndarray | None:
             return arr
     except (ValueError, pd.errors.ParserError):
         pass
+    if not _every_line_has(stripped, n_ch):
+        return None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # older numpy warns when it stops at a bad token
@@ -240,6 +242,20 @@ def _frames_fast(body: bytes, n_frames: int, n_ch: int) -> np.ndarray | None:
     if flat.size != n_frames * n_ch or not np.isfinite(flat).all():
         return None
     return flat.reshape(n_frames, n_ch)
+
+
+def _every_line_has(data: bytes, n_tokens: int) -> bool:
+    """Whether every line holds exactly ``n_tokens`` whitespace-separated tokens (vectorised).
+
+    A right total alone could hide a line with one value too many next to one with one too
+    few, which would silently shift channels between frames.
+    """
+    arr = np.frombuffer(data, dtype=np.uint8)
+    space = (arr == 32) | ((arr >= 9) & (arr <= 13))  # space, \t, \n, \v, \f, \r
+    token_starts = np.flatnonzero(~space & np.concatenate(([True], space[:-1])))
+    line_ends = np.append(np.flatnonzero(arr == 10), len(arr))
+    per_line = np.diff(np.concatenate(([0], np.searchsorted(token_starts, line_ends))))
+    return bool(np.all(per_line == n_tokens))
 
 
 def parse_bvh(data: bytes | str, path: str = "<string>"):
