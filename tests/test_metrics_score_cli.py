@@ -234,7 +234,8 @@ def test_mismatched_skeleton_is_a_clear_error(folders, tmp_path):
     for p in sorted(folders["natural"].glob("*.bvh")):
         save_motion(walk, other / p.name)
     res = run(["-r", folders["natural"], folders["jitter"], other, "-m", "kinematics", "--no-figures",
-               "-o", tmp_path / "o"])
+               "-o", tmp_path / "o"], ok=False)
+    assert res.exit_code == 1 and "nothing could be scored for condition(s) walkers" in res.output
     assert "skeleton differs from the natural motion: missing joints" in res.output
     summary = pd.read_csv(tmp_path / "o" / "summary.csv")
     assert "walkers" not in set(summary.condition) and "jitter" in set(summary.condition)
@@ -313,3 +314,22 @@ def test_demo_step_writes_condition_folders_and_scores_them(tmp_path):
     assert _value(summary, "mismatched", "ape").value > _value(summary, "smoothed", "ape").value
     assert any("jerk" in line for line in lines)
     assert (tmp_path / "score" / "figures" / "wrist_distribution.png").exists()
+
+
+def test_condition_with_nothing_scored_fails_after_writing_the_rest(folders, tmp_path):
+    """A condition whose only file is broken: the others are written, the exit code says it failed."""
+    import shutil
+
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    for f in sorted(folders["natural"].glob("*.bvh")):
+        (broken / f.name).write_text("HIERARCHY\nROOT Hips\n{\n")
+    jitter = tmp_path / "jitter"
+    shutil.copytree(folders["jitter"], jitter)
+    res = run(["-r", folders["natural"], jitter, broken, "-m", "kinematics", "--no-figures", "--quiet",
+               "-o", tmp_path / "o"], ok=False)
+    assert res.exit_code == 1
+    assert "nothing could be scored for condition(s) broken" in res.output
+    assert "unexpected end of the hierarchy" in res.output  # the reason, per file
+    summary = pd.read_csv(tmp_path / "o" / "summary.csv")
+    assert set(summary.condition) == {"natural", "jitter"}

@@ -106,3 +106,10 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
         click.echo(f"\nWrote {paths['summary_csv']} (and per_sequence.csv, per_joint.csv, histograms.csv, "
                    f"results.json, summary.md, summary.tex){'' if no_figures else f', {len(figures)} figure files'}"
                    f" to {out_dir}")
+    # The other conditions' results are written above; a condition with nothing scored is still a
+    # failure the caller (often a script) must notice.
+    scored = {row["condition"] for row in result["summary"]}
+    unscored = [c for c in result["plan"].conditions if c not in scored]
+    if unscored:
+        raise click.ClickException(f"nothing could be scored for condition(s) {', '.join(unscored)} (see the "
+                                   f"warnings above); the other results are in {out_dir}")
