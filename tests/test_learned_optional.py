@@ -37,7 +37,7 @@ def _run(tmp_path, code: str, *args: str, hide_torch: bool = True) -> subprocess
         (shim / "sitecustomize.py").write_text(BLOCK_TORCH)
         env["PYTHONPATH"] = os.pathsep.join([str(shim), env.get("PYTHONPATH", "")])
     return subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, env=env,
-                          timeout=120, cwd=tmp_path)
+                          timeout=600, cwd=tmp_path)
 
 
 def test_importing_the_learned_package_without_torch_names_the_extra(tmp_path):
@@ -91,3 +91,13 @@ def test_nothing_outside_the_learned_package_imports_torch(tmp_path):
     r = _run(tmp_path, code, hide_torch=False)
     assert r.returncode == 0, r.stderr
     assert "TORCH False" in r.stdout
+
+
+def test_demo_without_torch_skips_the_fgd_step_and_finishes(tmp_path):
+    """README's demo command installs no torch: the FGD step says how to get it, the rest runs."""
+    r = _run(tmp_path, "from evalsuite.cli import main; main(['demo', '-o', 'demo'])")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "skipped: the learned metrics (FGD, NSD, codebook) need PyTorch" in r.stdout
+    assert HINT in r.stdout
+    assert (tmp_path / "demo" / "analysis" / "report.html").is_file()
+    assert not (tmp_path / "demo" / "fgd").exists()
