@@ -197,19 +197,23 @@ def _describe(value) -> str:
     return f"{type(value).__name__} {value!r}"[:80]
 
 
+def _read_text(path: pathlib.Path, missing: str, encoding: str) -> str:
+    """A definition file's text, or a StudyDefinitionError saying it is missing or not UTF-8."""
+    if not path.is_file():
+        raise StudyDefinitionError(missing, path=path)
+    try:
+        return path.read_bytes().decode(encoding)
+    except UnicodeDecodeError as exc:
+        raise StudyDefinitionError(f"not UTF-8 text ({exc.reason})", path=path) from None
+
+
 # ----------------------------------------------------------------------------------- manifest
 
 def load_manifest(path) -> Manifest:
     """Read a stimulus manifest CSV (columns ``file, condition, segment`` and optionally
     ``kind, expected, motion_segment, block``); file names are relative to its folder."""
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise StudyDefinitionError("stimulus manifest not found; expected a CSV file", path=path)
-    raw = path.read_bytes()
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise StudyDefinitionError(f"not UTF-8 text ({exc.reason})", path=path) from None
+    text = _read_text(path, "stimulus manifest not found; expected a CSV file", "utf-8-sig")
     reader = csv.DictReader(text.splitlines())
     header = [h.strip() for h in (reader.fieldnames or [])]
     missing = [c for c in MANIFEST_REQUIRED if c not in header]
@@ -294,14 +298,9 @@ def _condition_in_name(file: str, conditions) -> str | None:
 def load_study(path) -> Study:
     """Load and validate a study definition (``.yaml``, ``.yml`` or ``.json``)."""
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise StudyDefinitionError("study definition not found; expected a YAML or JSON file", path=path)
-    raw = path.read_bytes()
+    text = _read_text(path, "study definition not found; expected a YAML or JSON file", "utf-8")
     try:
-        text = raw.decode("utf-8")
         data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-    except UnicodeDecodeError as exc:
-        raise StudyDefinitionError(f"not UTF-8 text ({exc.reason})", path=path) from None
     except json.JSONDecodeError as exc:
         raise StudyDefinitionError(f"invalid JSON: {exc.msg}", path=path, line=exc.lineno) from None
     except yaml.YAMLError as exc:
