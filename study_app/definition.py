@@ -197,12 +197,14 @@ def _describe(value) -> str:
     return f"{type(value).__name__} {value!r}"[:80]
 
 
-def _read_text(path: pathlib.Path, missing: str, encoding: str) -> str:
-    """A definition file's text, or a StudyDefinitionError saying it is missing or not UTF-8."""
+def _read_text(path: pathlib.Path, missing: str, encoding: str) -> tuple[bytes, str]:
+    """A definition file's bytes (for its hash) and text, or a StudyDefinitionError saying it is
+    missing or not UTF-8."""
     if not path.is_file():
         raise StudyDefinitionError(missing, path=path)
+    raw = path.read_bytes()
     try:
-        return path.read_bytes().decode(encoding)
+        return raw, raw.decode(encoding)
     except UnicodeDecodeError as exc:
         raise StudyDefinitionError(f"not UTF-8 text ({exc.reason})", path=path) from None
 
@@ -213,7 +215,7 @@ def load_manifest(path) -> Manifest:
     """Read a stimulus manifest CSV (columns ``file, condition, segment`` and optionally
     ``kind, expected, motion_segment, block``); file names are relative to its folder."""
     path = pathlib.Path(path)
-    text = _read_text(path, "stimulus manifest not found; expected a CSV file", "utf-8-sig")
+    raw, text = _read_text(path, "stimulus manifest not found; expected a CSV file", "utf-8-sig")
     reader = csv.DictReader(text.splitlines())
     header = [h.strip() for h in (reader.fieldnames or [])]
     missing = [c for c in MANIFEST_REQUIRED if c not in header]
@@ -298,7 +300,7 @@ def _condition_in_name(file: str, conditions) -> str | None:
 def load_study(path) -> Study:
     """Load and validate a study definition (``.yaml``, ``.yml`` or ``.json``)."""
     path = pathlib.Path(path)
-    text = _read_text(path, "study definition not found; expected a YAML or JSON file", "utf-8")
+    raw, text = _read_text(path, "study definition not found; expected a YAML or JSON file", "utf-8")
     try:
         data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
     except json.JSONDecodeError as exc:
