@@ -395,15 +395,21 @@ def test_mobile_devices_are_refused(study_dir, sqlite_url):
     assert r.status_code == 403 and "computer" in r.get_data(as_text=True)
 
 
-def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
-    text = h.STUDY_YAML.format(sessions=3).replace("platform: prolific", "platform: mturk").replace(
-        "id: gesture-test", "id: gesture-mturk")
-    (study_dir / "mturk.yaml").write_text(text)
+def _app_for_platform(study_dir, sqlite_url, platform: str, study_id: str):
+    """The test study entered through another platform, with its plans built."""
     from study_app.definition import load_study
     from study_app.design import build_plans, default_plans_path, write_plans
-    st = load_study(study_dir / "mturk.yaml")
+
+    text = h.STUDY_YAML.format(sessions=3).replace("platform: prolific", f"platform: {platform}").replace(
+        "id: gesture-test", f"id: {study_id}")
+    (study_dir / f"{platform}.yaml").write_text(text)
+    st = load_study(study_dir / f"{platform}.yaml")
     write_plans(build_plans(st), default_plans_path(st))
-    app = make_app(study_dir, sqlite_url, study_file="mturk.yaml")
+    return make_app(study_dir, sqlite_url, study_file=f"{platform}.yaml")
+
+
+def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
+    app = _app_for_platform(study_dir, sqlite_url, "mturk", "gesture-mturk")
     client = app.test_client()
     r = client.get("/start/gesture-mturk?assignmentId=ASSIGNMENT_ID_NOT_AVAILABLE&hitId=H1")
     assert r.status_code == 200 and 'id="preview"' in r.get_data(as_text=True)
@@ -428,14 +434,7 @@ def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
 
 
 def test_anonymous_participants_resume_by_cookie(study_dir, sqlite_url):
-    text = h.STUDY_YAML.format(sessions=3).replace("platform: prolific", "platform: anonymous").replace(
-        "id: gesture-test", "id: gesture-anon")
-    (study_dir / "anon.yaml").write_text(text)
-    from study_app.definition import load_study
-    from study_app.design import build_plans, default_plans_path, write_plans
-    st = load_study(study_dir / "anon.yaml")
-    write_plans(build_plans(st), default_plans_path(st))
-    app = make_app(study_dir, sqlite_url, study_file="anon.yaml")
+    app = _app_for_platform(study_dir, sqlite_url, "anonymous", "gesture-anon")
     client = app.test_client()
     first = client.get("/start/gesture-anon").headers["Location"]
     assert client.get("/start/gesture-anon").headers["Location"] == first
