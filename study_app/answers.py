@@ -110,6 +110,8 @@ def parse_answer(study: Study, page: dict, answer) -> dict:
         reason_ids = {r["id"] for r in block["reasons"]}
         if not isinstance(reasons, list) or any(r not in reason_ids for r in reasons):
             raise PayloadError("answer.reasons: expected a list of reason ids of this page")
+        if block["reasons_required"] and not reasons and any(c != "equal" for c in choices.values()):
+            raise PayloadError("answer.reasons: please tick at least one reason for your preference")
         return {"choices": {q: choices[q] for q in qids}, "reasons": sorted(set(reasons))}
     if ptype == "mushra":
         _only_keys(answer, ("ratings",), "answer")

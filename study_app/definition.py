@@ -376,7 +376,8 @@ PAGE_KEYS = {
     "finish": COMMON_PAGE_KEYS,
     "training": COMMON_PAGE_KEYS + ("of", "count", "segments"),
     "pairwise": COMMON_PAGE_KEYS + ("conditions", "pairs", "segments", "mismatched", "levels",
-                                    "questions", "reasons", "pages", "attention_checks", "muted"),
+                                    "questions", "reasons", "reasons_required", "pages", "attention_checks",
+                                    "muted"),
     "mushra": COMMON_PAGE_KEYS + ("conditions", "reference", "anchor", "segments", "question",
                                   "bands", "pages", "attention_checks", "tolerance", "muted"),
     "likert": COMMON_PAGE_KEYS + ("conditions", "segments", "statements", "points", "labels",
@@ -483,6 +484,10 @@ def _load_block(chk: _Checker, page, where, ptype, study: Study) -> dict:
             chk.fail(f"{where}.levels", f"expected 3 or 5, got {cfg['levels']}")
         cfg["questions"] = _load_text_items(chk, page, "questions", where, required=True)
         cfg["reasons"] = _load_text_items(chk, page, "reasons", where, required=False)
+        # HEMVIP (GENEA 2023) asks for at least one reason whenever a side is preferred.
+        cfg["reasons_required"] = chk.get(page, "reasons_required", where, bool, default=False)
+        if cfg["reasons_required"] and not cfg["reasons"]:
+            chk.fail(f"{where}.reasons_required", "needs a list of reasons to choose from")
         pairs = chk.get(page, "pairs", where, list, default=None, expected="a list of [condition, condition]")
         if cfg["mismatched"]:
             if pairs is not None:

@@ -156,6 +156,7 @@ def _page_data(study, spec, index, total, sid) -> dict:
         levels = _page_cfg(study, spec)["levels"]
         data["options"] = [{"value": v, "label": lbl} for v, lbl in
                            zip(PAIRWISE_ANSWERS[levels], PAIRWISE_LABELS[levels])]
+        data["reasons_required"] = _page_cfg(study, spec)["reasons_required"]
     return data
 
 

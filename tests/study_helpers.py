@@ -50,6 +50,7 @@ pages:
     reasons:
       - {{id: smooth, text: Smoother motion}}
       - {{id: rhythm, text: Better rhythm}}
+    reasons_required: true
     pages: 3
     attention_checks: [2]
     muted: true

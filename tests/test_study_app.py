@@ -517,6 +517,8 @@ def _walk_to(app, p, page_type, rng):
     ("pairwise", {"choices": {}}, "answer.choices.human_likeness"),
     ("pairwise", {"choices": {"human_likeness": "left", "other": "left"}}, "unexpected field"),
     ("pairwise", {"choices": {"human_likeness": "left"}, "reasons": ["bogus"]}, "reason ids"),
+    ("pairwise", {"choices": {"human_likeness": "right"}, "reasons": []}, "at least one reason"),
+    ("pairwise", {"choices": {"human_likeness": "left"}}, "at least one reason"),
     ("mushra", {"ratings": [1, 2]}, "expected a list of 3 ratings"),
     ("mushra", {"ratings": [1, 2, 101]}, "answer.ratings[2]: expected an integer in 0..100"),
     ("mushra", {"ratings": [1, 2, True]}, "answer.ratings[2]"),
@@ -531,6 +533,18 @@ def test_answers_are_validated_per_page_type(study_dir, sqlite_url, page_type, a
     r = p.submit(data, csrf, answer)
     assert r.status_code == 422 and fragment in r.get_json()["error"], r.get_json()
     assert p.page()[1]["index"] == data["index"]          # nothing was stored
+
+
+def test_required_reasons_are_not_asked_for_an_equal_judgement(study_dir, sqlite_url):
+    app = make_app(study_dir, sqlite_url)
+    assert app.extensions["study"].page("hl").cfg["reasons_required"]
+    p = h.Participant(app.test_client(), "preason01")
+    p.enter()
+    data, csrf, spec = _walk_to(app, p, "pairwise", np.random.default_rng(0))
+    assert spec["block"] == "hl" and data["reasons_required"] is True
+    r = p.submit(data, csrf, {"choices": {"human_likeness": "equal"}, "reasons": []})
+    assert r.status_code == 200, r.get_json()
+    assert p.page()[1]["index"] == data["index"] + 1
 
 
 def test_draft_autosave_survives_a_server_restart(study_dir, db_url):

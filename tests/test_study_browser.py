@@ -17,6 +17,7 @@ import pathlib
 import re
 import threading
 import urllib.request
+import zlib
 from types import SimpleNamespace
 
 import numpy as np
@@ -89,8 +90,9 @@ class Driver:
         self.page.set_default_timeout(20000)
         self.sent = []
         self.sid = None
-        self.rng = np.random.default_rng(abs(hash(pid)) % 2**32)
+        self.rng = np.random.default_rng(zlib.crc32(pid.encode()))  # same answers every run
         self.shot_names = []
+        self.reason_gates = 0
         # Everything the participant's browser received, for the leak check.
         self.seen_urls, self.seen_bodies = [], []
         self.page.on("request", lambda req: self.seen_urls.append(req.url))
@@ -149,6 +151,11 @@ class Driver:
         if t == "pairwise":
             for q, v in answer["choices"].items():
                 self.page.check(f"input[name='q-{q}'][value='{v}']")
+            if data.get("reasons_required") and set(answer["choices"].values()) != {"equal"}:
+                # a preference without a reason cannot be sent
+                assert self.page.is_disabled("#next")
+                assert "reason" in self.page.text_content("#message")
+                self.reason_gates += 1
             for r in answer["reasons"]:
                 self.page.check(f"input[name='reason'][value='{r}']")
         elif t == "mushra":
@@ -194,10 +201,23 @@ def test_participant_journey_in_chromium(env):
                 d.set_slider(1, 77)
             d.shot("mushra-before-reload")
             env.server = env.server.restart()
+            # a third slider moves just before the reload, inside the autosave delay: the
+            # page's leave guard asks to confirm and saves that draft on the way out
+            dialogs = []
+            d.page.once("dialog", lambda dialog: (dialogs.append(dialog.type), dialog.accept()))
+            d.set_slider(2, 55)
             d.page.reload()
+            assert dialogs == ["beforeunload"]
             assert d.data()["index"] == data["index"]
             assert d.page.input_value("input[name='rating-0']") == "33"
             assert d.page.input_value("input[name='rating-1']") == "77"
+            store = env.server.app.extensions["store"]
+            for _ in range(100):   # the keepalive request may land after the reload's GET
+                draft = store.view_current_page(d.sid)[2].draft or {}
+                if draft.get("fields", {}).get("rating-2") == "55":
+                    break
+                d.page.wait_for_timeout(50)
+            assert draft["fields"]["rating-2"] == "55" and 2 in draft["touched"]
             n = len(spec["slots"])
             for k in range(n):
                 assert "ok" in d.page.locator(f".status[data-slot='{k}']").get_attribute("class")
@@ -210,7 +230,7 @@ def test_participant_journey_in_chromium(env):
                       screenshot=spec.get("block", spec["type"]) not in seen_blocks or spec.get("check"))
         seen_types.add(spec["type"])
         seen_blocks.add(spec.get("block", spec["type"]))
-    assert reloaded and checks == ["pairwise", "mushra"]
+    assert reloaded and checks == ["pairwise", "mushra"] and d.reason_gates > 0
     assert seen_types >= {"consent", "questionnaire", "instructions", "pairwise", "mushra", "likert"}
     d.shot("finish")
     assert d.page.locator("#completion-code").text_content() == "DONE1234"

@@ -16,6 +16,8 @@
   var done = new Set();
   var touched = new Set();
   var busy = false;
+  var started = false;   // the participant has done something on this page
+  var leaving = false;   // the answer was stored: navigation is expected
   var MAX_BATCH = 1500;  // the server takes at most 2000 events per request
 
   function rid() {
@@ -27,8 +29,9 @@
     queue.push({id: rid(), kind: kind, slot: slot === undefined ? null : slot,
                 t: t === undefined ? null : t, ms: Date.now(), detail: detail || ""});
   }
-  function post(url, body) {
-    return fetch(url, {method: "POST", credentials: "same-origin",
+  function post(url, body, keepalive) {
+    // keepalive lets a request sent while the page unloads still reach the server
+    return fetch(url, {method: "POST", credentials: "same-origin", keepalive: !!keepalive,
       headers: {"Content-Type": "application/json", "X-CSRFToken": csrf, "Accept": "application/json"},
       body: JSON.stringify(body)});
   }
@@ -63,6 +66,7 @@
   videos.forEach(function (v) {
     var slot = Number(v.getAttribute("data-slot"));
     v.addEventListener("play", function () {
+      started = true;
       videos.forEach(function (o) { if (o !== v && !o.paused) o.pause(); });  // one video at a time
       log("play", slot, v.currentTime);
       if (!data.require_full_playback) markDone(slot);
@@ -131,7 +135,12 @@
     if (t === "consent" && !a.agree) return "Please tick the box to agree.";
     if (t === "pairwise") {
       if (need) return "Watch both videos" + (data.require_full_playback ? " to the end" : "") + " first.";
-      for (var q in a.choices) if (!a.choices[q]) return "Please answer every question.";
+      var preferred = false;
+      for (var q in a.choices) {
+        if (!a.choices[q]) return "Please answer every question.";
+        if (a.choices[q] !== "equal") preferred = true;
+      }
+      if (data.reasons_required && preferred && !a.reasons.length) return "Please tick at least one reason.";
     }
     if (t === "mushra") {
       if (need) return "Play every video" + (data.require_full_playback ? " to the end" : "") + " and rate it.";
@@ -182,12 +191,17 @@
     ((d && d.touched) || []).forEach(function (s) { touched.add(Number(s)); });
   }
   var saveTimer = null;
+  function saveDraft(keepalive) {
+    saveTimer = null;
+    post(data.draft_url, {draft: snapshot()}, keepalive).catch(function () {});
+  }
   function scheduleSave() {
     clearTimeout(saveTimer);
-    saveTimer = setTimeout(function () { post(data.draft_url, {draft: snapshot()}).catch(function () {}); }, 400);
+    saveTimer = setTimeout(saveDraft, 400);
   }
   form.addEventListener("input", function (ev) {
     var el = ev.target;
+    started = true;
     if (el.type === "range") touched.add(Number(el.getAttribute("data-slot")));
     if (el.type === "radio" || el.type === "range") log("choice", el.getAttribute("data-slot") === null ? null : Number(el.getAttribute("data-slot")), null, (el.name + "=" + el.value).slice(0, 200));
     msg.removeAttribute("data-kind");
@@ -198,6 +212,18 @@
   window.addEventListener("resize", update);
   document.addEventListener("visibilitychange", function () { log(document.hidden ? "hidden" : "visible"); });
   restore(data.draft);
+
+  // ---- leaving mid-page (reload, close, back): save what is pending, and ask the browser to
+  // confirm once the participant has started on the page (HEMVIP guards its pages the same way)
+  window.addEventListener("beforeunload", function (ev) {
+    if (leaving) return;
+    if (saveTimer !== null) { clearTimeout(saveTimer); saveDraft(true); }
+    // keepalive bodies are limited to 64 kB: a few hundred events
+    if (queue.length) post(data.events_url, {events: queue.splice(0, 300)}, true).catch(function () {});
+    if (!started) return;
+    ev.preventDefault();
+    ev.returnValue = "";   // older browsers need a value to show the prompt
+  });
 
   // ---- submit: one token per page, reused by every retry, so the server stores one answer
   function sleep(ms) { return new Promise(function (r) { setTimeout(r, ms); }); }
@@ -220,6 +246,7 @@
         if (r && (r.ok || r.status === 409)) {
           var j = await r.json();
           sessionStorage.removeItem(tokenKey);
+          leaving = true;
           window.location.assign(j.next);
           return;
         }
