@@ -73,7 +73,7 @@ def overview():
             comparisons[(r["question"], f"{r['condition_a']} vs {r['condition_b']}")] += 1
         else:
             comparisons[(r["question"], r["condition"])] += 1
-    failures = [s for s in dump["sessions"] if s.failed_checks]
+    failures = [s for s in dump["sessions"] if s.failed_checks or s.status == "failed"]
     plans = sorted(dump["plans"].values(), key=lambda p: p.position)
     plan_counts = Counter(p.status if not (p.status == "reserved" and p.reserved_until < now)
                           else "reserved (expired)" for p in plans)

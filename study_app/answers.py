@@ -10,6 +10,7 @@ import re
 from study_app.definition import (PAIRWISE_ANSWERS, PAIRWISE_EXPECTED_RE, Study,
                                   mushra_check_passes)
 from study_app.errors import StudyDefinitionError
+from study_app.headphones import correct_choice
 
 TOKEN_RE = re.compile(r"^[A-Za-z0-9_-]{8,64}$")
 EVENT_KINDS = ("play", "pause", "seeked", "ended", "choice", "reload", "hidden", "visible", "resize")
@@ -75,7 +76,8 @@ def parse_events(value, n_slots: int) -> list[dict]:
 
 
 def n_slots(page: dict) -> int:
-    return {"pairwise": 2, "mushra": len(page.get("slots", [])), "likert": 1}.get(page["type"], 0)
+    return {"pairwise": 2, "mushra": len(page.get("slots", [])), "likert": 1,
+            "headphone_check": len(page.get("trials", []))}.get(page["type"], 0)
 
 
 def parse_answer(study: Study, page: dict, answer) -> dict:
@@ -96,6 +98,15 @@ def parse_answer(study: Study, page: dict, answer) -> dict:
         return {}
     if ptype == "questionnaire":
         return {"responses": _questionnaire(study.page(page["page"]).cfg["questions"], answer)}
+    if ptype == "headphone_check":
+        _only_keys(answer, ("choices",), "answer")
+        choices, n = answer.get("choices"), len(page["trials"])
+        if not isinstance(choices, list) or len(choices) != n:
+            raise PayloadError(f"answer.choices: expected a list of {n} answers (1, 2 or 3)")
+        choices = [_int(c, 1, 3, f"answer.choices[{i}]") for i, c in enumerate(choices)]
+        correct = sum(c == correct_choice(o) for c, o in zip(choices, page["trials"]))
+        return {"choices": choices, "correct": correct,
+                "passed": correct >= study.page(page["page"]).cfg["pass"]}
     block = study.page(page["block"]).cfg
     if ptype == "pairwise":
         _only_keys(answer, ("choices", "reasons"), "answer")

@@ -22,8 +22,8 @@ import yaml
 from study_app.errors import StudyDefinitionError
 
 ID_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
-PAGE_TYPES = ("consent", "instructions", "questionnaire", "training", "pairwise", "mushra",
-              "likert", "finish")
+PAGE_TYPES = ("consent", "instructions", "questionnaire", "headphone_check", "training", "pairwise",
+              "mushra", "likert", "finish")
 BLOCK_TYPES = ("pairwise", "mushra", "likert")
 PLATFORMS = ("prolific", "mturk", "anonymous")
 QUESTION_TYPES = ("number", "choice", "text")
@@ -374,6 +374,7 @@ PAGE_KEYS = {
     "instructions": COMMON_PAGE_KEYS,
     "questionnaire": COMMON_PAGE_KEYS + ("questions",),
     "finish": COMMON_PAGE_KEYS,
+    "headphone_check": COMMON_PAGE_KEYS + ("trials", "pass", "on_fail"),
     "training": COMMON_PAGE_KEYS + ("of", "count", "segments"),
     "pairwise": COMMON_PAGE_KEYS + ("conditions", "pairs", "segments", "mismatched", "levels",
                                     "questions", "reasons", "reasons_required", "pages", "attention_checks",
@@ -401,6 +402,10 @@ def _load_page(chk: _Checker, page, where: str, study: Study) -> Page:
                                      default="I have read the information above and agree to take part.")
     elif ptype == "questionnaire":
         cfg["questions"] = _load_questions(chk, page, where)
+    elif ptype == "headphone_check":
+        cfg.update(_load_headphone_check(chk, page, where))
+        cfg["title"] = cfg["title"] or "Headphone check"
+        cfg["text"] = cfg["text"] or HEADPHONE_TEXT
     elif ptype == "training":
         cfg["of"] = chk.ident(page, "of", where)
         cfg["count"] = chk.int_range(page, "count", where, 1, 100, default=1)
@@ -408,6 +413,27 @@ def _load_page(chk: _Checker, page, where: str, study: Study) -> Page:
     elif ptype in BLOCK_TYPES:
         cfg.update(_load_block(chk, page, where, ptype, study))
     return Page(id=pid, type=ptype, cfg=cfg)
+
+
+HEADPHONE_TEXT = (
+    "Please put on headphones and set a comfortable volume. Each sound below has three tones. "
+    "Play it once (it cannot be repeated) and choose the tone that was the quietest.")
+HEADPHONE_ON_FAIL = ("end", "continue")
+
+
+def _load_headphone_check(chk, page, where) -> dict:
+    """Woods et al. (2017) screening: ``trials`` (default 6), ``pass`` = correct answers needed
+    (default 5 of 6, their threshold), ``on_fail`` = ``end`` the session with the failure code
+    (default) or ``continue`` and only record the outcome."""
+    trials = chk.int_range(page, "trials", where, 1, 30, default=6)
+    need = chk.int_range(page, "pass", where, 1, 30, default=max(1, round(trials * 5 / 6)))
+    if need > trials:
+        chk.fail(f"{where}.pass", f"expected at most trials ({trials}), got {need}")
+    on_fail = chk.get(page, "on_fail", where, str, default="end",
+                      expected=f"one of {', '.join(HEADPHONE_ON_FAIL)}")
+    if on_fail not in HEADPHONE_ON_FAIL:
+        chk.fail(f"{where}.on_fail", f"expected one of {', '.join(HEADPHONE_ON_FAIL)}, got {on_fail!r}")
+    return {"trials": trials, "pass": need, "on_fail": on_fail}
 
 
 def _load_questions(chk, page, where):

@@ -16,6 +16,8 @@
 * attention-check pages are inserted at the block positions the definition names (never
   position 0), training pages where the definition places them, flagged and excluded from
   analysis;
+* a ``headphone_check`` page gets its own shuffled tone orders per session (the quiet tone in
+  each position equally often, see :mod:`study_app.headphones`);
 * ``mismatched: true`` pairwise blocks pair each condition's matched video with its
   mismatched one (same speech, motion from another segment); A is always the matched one.
 
@@ -27,10 +29,12 @@ import hashlib
 import json
 import math
 import pathlib
+import random
 from collections import Counter
 
 from study_app.definition import BLOCK_TYPES, Study, attention_pool
 from study_app.errors import StudyDefinitionError
+from study_app.headphones import trial_orders
 
 PLANS_FORMAT = "evalsuite-study-plans/1"
 
@@ -156,6 +160,10 @@ def build_plans(study: Study) -> dict:
                     p = _regular_page(block, s * n + j, lookup, segments)
                     pages.append({"page": f"{page.id}-{j + 1:02d}", "block": block.id, "training": True,
                                   "check": False, **p})
+            elif page.type == "headphone_check":
+                rng = random.Random(f"{study.seed}:{s}:{page.id}")   # str seeds are stable across Pythons
+                pages.append({"page": page.id, "type": page.type,
+                              "trials": trial_orders(page.cfg["trials"], rng)})
             else:
                 pages.append({"page": page.id, "type": page.type})
         plans.append({"key": f"plan-{s:04d}", "pages": pages})

@@ -1,4 +1,5 @@
-"""Media blueprint: a participant's videos, addressed by page index and slot only.
+"""Media blueprint: a participant's videos (and headphone-check sounds), addressed by page
+index and slot only.
 
 The URL never carries a file name: the server looks the blinded file up in the
 participant's own plan and serves it from the manifest's folder with
@@ -7,9 +8,10 @@ browsers can seek. Only pages up to the participant's current page are served.
 """
 from __future__ import annotations
 
-from flask import Blueprint, abort, current_app, send_from_directory
+from flask import Blueprint, Response, abort, current_app, request, send_from_directory
 
 from study_app.answers import n_slots
+from study_app.headphones import trial_wav
 from study_app.participant import _own
 
 bp = Blueprint("media", __name__)
@@ -25,6 +27,12 @@ def video(sid, index, slot):
     page = pages[index]
     if not 0 <= slot < n_slots(page):
         abort(404)
+    if page["type"] == "headphone_check":
+        # generated tones; conditional=True so browsers may fetch byte ranges as for videos
+        body = trial_wav(page["trials"][slot])
+        resp = Response(body, mimetype="audio/wav")
+        resp.headers["Cache-Control"] = "private, no-store"
+        return resp.make_conditional(request, accept_ranges=True, complete_length=len(body))
     file = page["slots"][slot] if page["type"] == "mushra" else (
         page["stimulus"] if page["type"] == "likert" else
         page["a"] if (slot == 0) == (page["position_a"] == "left") else page["b"])

@@ -149,6 +149,8 @@ def _page_data(study, spec, index, total, sid) -> dict:
             "min_width": study.min_width}
     slots = n_slots(spec)
     data["videos"] = [url_for("media.video", sid=sid, index=index, slot=k) for k in range(slots)]
+    if spec["type"] == "headphone_check":
+        data["play_once"] = True          # Woods et al.: each trial is heard once
     if spec["type"] in ("pairwise", "mushra", "likert"):
         data["training"] = bool(spec.get("training"))
         data["muted"] = _page_cfg(study, spec)["muted"]
@@ -171,7 +173,7 @@ def _ended(sess):
     if sess.status == "failed":
         code = study.failure_code
         link = study.completion_url(code) if study.platform == "prolific" and code else ""
-        return render_template("failed.html", study=study, code=code, link=link)
+        return render_template("failed.html", study=study, code=code, link=link, reason=sess.end_reason)
     return _message("Time expired", "Your place in this study has expired. Please return the task.", 410)
 
 
@@ -212,7 +214,8 @@ def answer(sid, index):
                 e["slot"] for e in events if e["kind"] == kind}
             if not set(range(slots)) <= seen:
                 what = "to the end " if kind == "ended" else ""
-                raise PayloadError(f"please play every video {what}before answering")
+                media = "sound" if spec["type"] == "headphone_check" else "video"
+                raise PayloadError(f"please play every {media} {what}before answering")
         if spec["type"] == "consent":
             width = body.get("width")
             if isinstance(width, int) and not isinstance(width, bool):
@@ -220,6 +223,9 @@ def answer(sid, index):
                     raise PayloadError(f"please use a browser window at least {study.min_width} "
                                        "pixels wide")
                 data["width"] = width
+        if (spec["type"] == "headphone_check" and not data["passed"]
+                and study.page(spec["page"]).cfg["on_fail"] == "end"):
+            data["_end_reason"] = "headphone_check"
         data["_client_rt_ms"] = client_rt
         return data, score_attention(study, spec, data), events
 

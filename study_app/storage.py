@@ -373,6 +373,7 @@ class Store:
                                                              PageView.page_index == page_index)).first()
                     shown = view.shown_at if view else now
                     client_rt = data.pop("_client_rt_ms", None)
+                    end_reason = data.pop("_end_reason", None)
                     answer = Answer(submit_token=token, session_id=session_id, page_index=page_index,
                                     page_id=plan.pages[page_index]["page"], data=data,
                                     attention_passed=passed, shown_at=shown, answered_at=now,
@@ -385,7 +386,7 @@ class Store:
                         sess.passed_checks += 1
                     elif passed is False:
                         sess.failed_checks += 1
-                    self._advance(db, sess, plan, now, data)
+                    self._advance(db, sess, plan, now, data, end_reason)
                     # Sliding reservation: an active participant keeps their plan.
                     if sess.status == "active":
                         plan.reserved_until = now + dt.timedelta(minutes=self._reservation_minutes)
@@ -410,11 +411,13 @@ class Store:
         self._max_failed = study.max_failed_attention_checks
         self._release_failed = study.release_failed
 
-    def _advance(self, db, sess, plan, now, data):
+    def _advance(self, db, sess, plan, now, data, end_reason=None):
         pages = plan.pages
         if data.get("honeypot"):
             sess.honeypot = True
             self._end(sess, plan, "failed", "honeypot", now)
+        elif end_reason:
+            self._end(sess, plan, "failed", end_reason, now)
         elif sess.failed_checks >= self._max_failed:
             self._end(sess, plan, "failed", "attention_checks", now)
         elif pages[sess.current_page]["type"] == "finish":

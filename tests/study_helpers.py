@@ -32,6 +32,10 @@ pages:
       - {{id: age, type: number, text: Your age, min: 18, max: 99}}
       - {{id: gender, type: choice, text: Gender, options: [female, male, other, prefer not to say]}}
       - {{id: comments, type: text, text: "Anything else?", required: false}}
+  - type: headphone_check
+    id: headphones
+    trials: 2
+    pass: 2
   - type: instructions
     id: intro
     title: Instructions
@@ -86,7 +90,8 @@ pages:
 ATTENTION = [("seg01", "this"), ("seg02", "equal"), ("seg01", "70"), ("seg02", "good")]
 
 
-def make_study(folder, sessions: int = 6, seconds: float = 1.0, yaml_text: str | None = None):
+def make_study(folder, sessions: int = 6, seconds: float = 1.0, yaml_text: str | None = None,
+               name: str = "study.yaml"):
     """Write stimuli + study.yaml + plans into ``folder``; returns the study path."""
     from study_app.definition import load_study
     from study_app.design import build_plans, default_plans_path, write_plans
@@ -97,7 +102,7 @@ def make_study(folder, sessions: int = 6, seconds: float = 1.0, yaml_text: str |
     if not (stim / "manifest.csv").exists():
         make_sample_stimuli(stim, CONDITIONS, SEGMENTS, mismatched=True, attention=ATTENTION,
                             seconds=seconds)
-    path = folder / "study.yaml"
+    path = folder / name
     path.write_text(yaml_text or STUDY_YAML.format(sessions=sessions))
     study = load_study(path)
     write_plans(build_plans(study), default_plans_path(study))
@@ -111,6 +116,7 @@ import re as _re
 import secrets as _secrets
 
 from study_app.definition import PAIRWISE_ANSWERS
+from study_app.headphones import correct_choice
 
 PAGE_DATA_RE = _re.compile(r'<script id="page-data" type="application/json">(.*?)</script>', _re.S)
 CSRF_RE = _re.compile(r'name="csrf_token" id="csrf_token" value="([^"]+)"')
@@ -181,6 +187,8 @@ def make_answer(study, spec, rng, pass_check=True):
         return {}
     if t == "questionnaire":
         return {"age": int(rng.integers(18, 80)), "gender": "other", "comments": "fine"}
+    if t == "headphone_check":      # a participant on headphones (screening is tested on its own)
+        return {"choices": [correct_choice(o) for o in spec["trials"]]}
     block = study.page(spec["block"]).cfg
     by_file = study.manifest.by_file()
     if t == "pairwise":

@@ -116,7 +116,7 @@ class Driver:
         return h.plan_pages(self.env.server.app, self.sid)
 
     def play_all(self):
-        n = self.page.locator("video[data-slot]").count()
+        n = self.page.locator("video[data-slot], audio[data-slot]").count()
         for k in range(n):
             status = self.page.locator(f".status[data-slot='{k}']")
             if "ok" in (status.get_attribute("class") or ""):
@@ -146,8 +146,15 @@ class Driver:
             self.page.fill("#q-age", str(answer["age"]))
             self.page.select_option("#q-gender", answer["gender"])
             self.page.fill("#q-comments", answer["comments"])
-        elif t in ("pairwise", "mushra", "likert"):
+        elif t in ("pairwise", "mushra", "likert", "headphone_check"):
             self.play_all()
+        if t == "headphone_check":
+            # each sound is heard once: after playing, no button can play it again
+            buttons = self.page.locator("button.play")
+            assert buttons.count() == len(spec["trials"])
+            assert all(buttons.nth(k).is_disabled() for k in range(buttons.count()))
+            for k, c in enumerate(answer["choices"]):
+                self.page.check(f"input[name='t-{k}'][value='{c}']")
         if t == "pairwise":
             for q, v in answer["choices"].items():
                 self.page.check(f"input[name='q-{q}'][value='{v}']")
@@ -231,7 +238,7 @@ def test_participant_journey_in_chromium(env):
         seen_types.add(spec["type"])
         seen_blocks.add(spec.get("block", spec["type"]))
     assert reloaded and checks == ["pairwise", "mushra"] and d.reason_gates > 0
-    assert seen_types >= {"consent", "questionnaire", "instructions", "pairwise", "mushra", "likert"}
+    assert seen_types >= {"consent", "questionnaire", "instructions", "pairwise", "mushra", "likert", "headphone_check"}
     d.shot("finish")
     assert d.page.locator("#completion-code").text_content() == "DONE1234"
     assert d.page.get_attribute("#return-link", "href") == \

@@ -24,7 +24,10 @@ def folder(tmp_path_factory):
 
 @pytest.fixture()
 def base(folder):
-    return yaml.safe_load((folder / "study.yaml").read_text())
+    """The test study without its headphone check (the page indices below count without it)."""
+    data = yaml.safe_load((folder / "study.yaml").read_text())
+    data["pages"] = [p for p in data["pages"] if p["type"] != "headphone_check"]
+    return data
 
 
 def _load(folder, data, name="variant.yaml"):
@@ -106,6 +109,14 @@ CASES = [
      "pages[4].conditions", "at least 2 entries"),
     ("duplicate conditions", _pages(lambda p: p[:4] + [{**p[4], "conditions": ["SYSALPHA", "SYSALPHA"]}] + p[5:]),
      "pages[4].conditions", "distinct conditions"),
+    ("headphone pass > trials", _pages(lambda p: p[:1] + [{"type": "headphone_check", "id": "hp", "trials": 3, "pass": 4}] + p[1:]),
+     "pages[1].pass", "at most trials (3), got 4"),
+    ("headphone trials", _pages(lambda p: p[:1] + [{"type": "headphone_check", "id": "hp", "trials": 0}] + p[1:]),
+     "pages[1].trials", "1..30"),
+    ("headphone on_fail", _pages(lambda p: p[:1] + [{"type": "headphone_check", "id": "hp", "on_fail": "warn"}] + p[1:]),
+     "pages[1].on_fail", "expected one of end, continue, got 'warn'"),
+    ("headphone unknown key", _pages(lambda p: p[:1] + [{"type": "headphone_check", "id": "hp", "volume": 3}] + p[1:]),
+     "pages[1].volume", "unknown field"),
     ("reasons required without reasons", _pages(lambda p: p[:4] + [{**{k: v for k, v in p[4].items() if k != "reasons"}, "reasons_required": True}] + p[5:]),
      "pages[4].reasons_required", "needs a list of reasons"),
     ("reasons required not bool", _pages(lambda p: p[:4] + [{**p[4], "reasons_required": "yes"}] + p[5:]),
@@ -247,8 +258,9 @@ def test_plans_are_balanced(folder):
     pair_counts, side_counts, check_positions = Counter(), Counter(), Counter()
     for plan in plans["plans"]:
         pages = plan["pages"]
-        assert [p["page"] for p in pages][:3] == ["consent", "demographics", "intro"]
-        assert pages[3]["training"] and pages[3]["page"] == "training-01"
+        assert [p["page"] for p in pages][:4] == ["consent", "demographics", "headphones", "intro"]
+        assert len(pages[2]["trials"]) == 2 and set(pages[2]["trials"]) <= set(range(6))
+        assert pages[4]["training"] and pages[4]["page"] == "training-01"
         hl = [p for p in pages if p.get("block") == "hl" and not p["training"]]
         assert len(hl) == 4 and hl[2]["check"] and not any(p["check"] for i, p in enumerate(hl) if i != 2)
         assert by_file[hl[2]["a"]].kind == "attention"

@@ -45,7 +45,8 @@
   setInterval(flush, 4000);
 
   // ---- videos
-  var videos = Array.prototype.slice.call(document.querySelectorAll("video[data-slot]"));
+  var videos = Array.prototype.slice.call(document.querySelectorAll("video[data-slot], audio[data-slot]"));
+  var startedSlots = new Set();  // play_once pages: sounds already started
   function coverage(v) {
     var total = 0;
     for (var i = 0; i < v.played.length; i++) total += v.played.end(i) - v.played.start(i);
@@ -55,18 +56,29 @@
   function statusEl(slot) { return document.querySelector(".status[data-slot='" + slot + "']"); }
   function refreshButton(v) {
     var b = button(Number(v.getAttribute("data-slot")));
-    if (b) b.textContent = v.paused ? (v.ended || done.has(Number(v.getAttribute("data-slot"))) ? "Play again" : "Play") : "Pause";
+    if (!b) return;
+    if (data.play_once) {
+      // heard once: no pause, no replay, and no other sound while one plays
+      var playing = videos.some(function (o) { return !o.paused && !o.ended; });
+      videos.forEach(function (o) {
+        var s = Number(o.getAttribute("data-slot")), ob = button(s);
+        if (ob) ob.disabled = playing || startedSlots.has(s) || done.has(s);
+      });
+      return;
+    }
+    b.textContent = v.paused ? (v.ended || done.has(Number(v.getAttribute("data-slot"))) ? "Play again" : "Play") : "Pause";
   }
   function markDone(slot) {
     done.add(slot);
     var s = statusEl(slot);
-    if (s) { s.textContent = "watched"; s.classList.add("ok"); }
+    if (s) { s.textContent = data.type === "headphone_check" ? "heard" : "watched"; s.classList.add("ok"); }
     update();
   }
   videos.forEach(function (v) {
     var slot = Number(v.getAttribute("data-slot"));
     v.addEventListener("play", function () {
       started = true;
+      startedSlots.add(slot);
       videos.forEach(function (o) { if (o !== v && !o.paused) o.pause(); });  // one video at a time
       log("play", slot, v.currentTime);
       if (!data.require_full_playback) markDone(slot);
@@ -83,6 +95,7 @@
     });
     var b = button(slot);
     if (b) b.addEventListener("click", function () {
+      if (data.play_once && startedSlots.has(slot)) return;
       if (v.paused) {
         if (v.ended) v.currentTime = 0;
         var p = v.play();
@@ -91,6 +104,7 @@
     });
   });
   (data.require_full_playback ? data.ended || [] : data.played || []).forEach(function (s) { markDone(Number(s)); });
+  videos.forEach(refreshButton);
 
   // ---- answers
   function inputs() { return Array.prototype.slice.call(form.querySelectorAll("input, select, textarea")); }
@@ -101,6 +115,12 @@
       return {agree: document.getElementById("agree").checked, website: hp ? hp.value : ""};
     }
     if (t === "instructions") return {};
+    if (t === "headphone_check") {
+      return {choices: Array.prototype.map.call(form.querySelectorAll("fieldset[data-trial]"), function (fs) {
+        var c = fs.querySelector("input:checked");
+        return c ? Number(c.value) : null;
+      })};
+    }
     if (t === "questionnaire") {
       var out = {};
       form.querySelectorAll("[data-qid]").forEach(function (el) { out[el.getAttribute("data-qid")] = el.value; });
@@ -133,6 +153,8 @@
     var t = data.type, a = collect();
     var need = videos.length - videos.filter(function (v) { return done.has(Number(v.getAttribute("data-slot"))); }).length;
     if (t === "consent" && !a.agree) return "Please tick the box to agree.";
+    if (t === "headphone_check" && (need || a.choices.indexOf(null) >= 0))
+      return "Play each sound and choose its quietest tone.";
     if (t === "pairwise") {
       if (need) return "Watch both videos" + (data.require_full_playback ? " to the end" : "") + " first.";
       var preferred = false;

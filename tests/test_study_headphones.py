@@ -1,0 +1,209 @@
+"""Headphone screening page (Woods et al. 2017): the sounds, the plans, scoring and what a
+failed screening does to the session."""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import random
+import wave
+from collections import Counter
+
+import numpy as np
+import pytest
+
+import study_helpers as h
+from study_app import create_app
+from study_app.headphones import (FREQUENCY, GAP_SECONDS, ORDERS, RATE, TONE_SECONDS, correct_choice,
+                                  trial_orders, trial_samples, trial_wav)
+from study_app.storage import ParticipantSession, Plan
+
+
+# ------------------------------------------------------------------------------ the sounds
+
+def _tones(order):
+    """The three tones of a trial, cut at their known places: list of (n, 2) arrays."""
+    x = trial_samples(order)
+    n, gap = int(RATE * TONE_SECONDS), int(RATE * GAP_SECONDS)
+    assert len(x) == 3 * n + 2 * gap
+    return [x[k * (n + gap): k * (n + gap) + n] for k in range(3)]
+
+
+@pytest.mark.parametrize("order", range(len(ORDERS)))
+def test_each_trial_has_a_plain_a_6db_quieter_and_an_antiphase_tone(order):
+    tones = _tones(order)
+    rms = [np.sqrt(np.mean(t ** 2)) for t in tones]
+    kinds = ORDERS[order]
+    plain, quiet, anti = (tones[kinds.index(k)] for k in ("plain", "quiet", "antiphase"))
+    p_rms, q_rms, a_rms = (rms[kinds.index(k)] for k in ("plain", "quiet", "antiphase"))
+    assert 20 * np.log10(q_rms / p_rms) == pytest.approx(-6.0, abs=1e-9)
+    assert a_rms == pytest.approx(p_rms, rel=1e-12)             # as loud in each ear ...
+    np.testing.assert_array_equal(plain[:, 0], plain[:, 1])
+    np.testing.assert_array_equal(anti[:, 0], -anti[:, 1])        # ... but in antiphase
+    # over loudspeakers the channels add in the air: the antiphase tone cancels and sounds
+    # quietest, which is how the test tells loudspeakers from headphones
+    mono = [np.sqrt(np.mean(t.sum(axis=1) ** 2)) for t in tones]
+    assert int(np.argmin(mono)) == kinds.index("antiphase")
+    assert int(np.argmin(rms)) + 1 == correct_choice(order)
+    # a 200 Hz tone, silent between tones, within [-1, 1]
+    spectrum = np.abs(np.fft.rfft(plain[:, 0]))
+    assert np.fft.rfftfreq(len(plain), 1 / RATE)[np.argmax(spectrum)] == pytest.approx(FREQUENCY)
+    x = trial_samples(order)
+    n = int(RATE * TONE_SECONDS)
+    assert not x[n:n + int(RATE * GAP_SECONDS)].any() and np.abs(x).max() <= 0.25 + 1e-12
+    # ramps: starts and ends at zero
+    assert abs(plain[0, 0]) < 1e-12 and abs(plain[-1, 0]) < 1e-3
+
+
+def test_wav_file_holds_the_samples():
+    with wave.open(io.BytesIO(trial_wav(4))) as w:
+        assert (w.getnchannels(), w.getsampwidth(), w.getframerate()) == (2, 2, RATE)
+        pcm = np.frombuffer(w.readframes(w.getnframes()), "<i2").reshape(-1, 2)
+    np.testing.assert_allclose(pcm / 32767, trial_samples(4), atol=0.5 / 32767 + 1e-12)
+    with pytest.raises(ValueError, match="0..5"):
+        trial_wav(6)
+
+
+def test_trial_orders_put_the_quiet_tone_everywhere_equally_often():
+    orders = trial_orders(12, random.Random(1))
+    assert Counter(orders) == {k: 2 for k in range(6)}
+    assert Counter(correct_choice(o) for o in orders) == {1: 4, 2: 4, 3: 4}
+    assert trial_orders(12, random.Random(1)) == orders and trial_orders(12, random.Random(2)) != orders
+
+
+# ------------------------------------------------------------------------ in the study app
+
+HEADPHONES = "  - type: headphone_check\n    id: headphones\n    trials: 2\n    pass: 2\n"
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    f = tmp_path_factory.mktemp("headphones")
+    h.make_study(f)
+    for name, on_fail in (("end", "end"), ("cont", "continue")):
+        text = h.STUDY_YAML.format(sessions=4).replace(
+            HEADPHONES, f"  - type: headphone_check\n    id: headphones\n    on_fail: {on_fail}\n"
+        ).replace("id: gesture-test", f"id: hp-{name}")
+        assert f"on_fail: {on_fail}" in text
+        h.make_study(f, yaml_text=text, name=f"{name}.yaml")
+    return f
+
+
+def make_app(folder, tmp_path, name):
+    return create_app({"STUDY": str(folder / f"{name}.yaml"), "DATABASE_URL": f"sqlite:///{tmp_path / 'hp.db'}",
+                       "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
+                       "INSTANCE_PATH": str(folder / "inst")})
+
+
+def walk_to_screening(app, pid, study_id):
+    p = h.Participant(app.test_client(), pid, study_id)
+    assert p.enter().status_code == 302
+    pages = h.plan_pages(app, p.sid)
+    study = app.extensions["study"]
+    while True:
+        r, data, csrf = p.page()
+        if data["type"] == "headphone_check":
+            return p, r, data, csrf, pages[data["index"]]
+        assert p.submit(data, csrf, h.make_answer(study, pages[data["index"]], np.random.default_rng(0))).status_code == 200
+
+
+def n_correct_answer(spec, n_correct):
+    right = [correct_choice(o) for o in spec["trials"]]
+    return [c if k < n_correct else c % 3 + 1 for k, c in enumerate(right)]
+
+
+def test_defaults_follow_woods_et_al(folder):
+    from study_app.definition import load_study
+    cfg = load_study(folder / "end.yaml").page("headphones").cfg
+    assert (cfg["trials"], cfg["pass"], cfg["on_fail"]) == (6, 5, "end")
+    assert cfg["title"] == "Headphone check" and "headphones" in cfg["text"]
+
+
+def test_page_and_sounds_do_not_give_the_answer_away(folder, tmp_path):
+    app = make_app(folder, tmp_path, "end")
+    p, r, data, csrf, spec = walk_to_screening(app, "phpleak01", "hp-end")
+    html = r.get_data(as_text=True)
+    assert len(data["videos"]) == 6 and data["play_once"] is True
+    assert "trials" not in data and "antiphase" not in html and "plain" not in html
+    assert html.count("<audio") == 6 and "Which tone was the quietest?" in html
+    for k, url in enumerate(data["videos"]):
+        assert url.endswith(f"/media/{data['index']}/{k}")
+        snd = p.client.get(url)
+        assert snd.status_code == 200 and snd.mimetype == "audio/wav"
+        assert snd.data == trial_wav(spec["trials"][k])
+        assert snd.headers["Cache-Control"] == "private, no-store"
+    part = p.client.get(data["videos"][0], headers={"Range": "bytes=0-43"})
+    assert part.status_code == 206 and part.data == trial_wav(spec["trials"][0])[:44]
+    assert p.client.get(data["videos"][0][:-1] + "6").status_code == 404
+
+
+@pytest.mark.parametrize("answer,fragment", [
+    ({"choices": [1, 2, 3]}, "expected a list of 6 answers"),
+    ({"choices": [1, 2, 3, 1, 2, 4]}, "answer.choices[5]: expected an integer in 1..3"),
+    ({"choices": [1, 2, 3, 1, 2, True]}, "answer.choices[5]"),
+    ({"choices": [1] * 6, "extra": 1}, "unexpected field 'extra'"),
+])
+def test_answers_are_validated(folder, tmp_path, answer, fragment):
+    app = make_app(folder, tmp_path, "end")
+    p, _, data, csrf, _ = walk_to_screening(app, "phpvalid1", "hp-end")
+    r = p.submit(data, csrf, answer)
+    assert r.status_code == 422 and fragment in r.get_json()["error"], r.get_json()
+
+
+def test_every_sound_must_be_heard_to_the_end(folder, tmp_path):
+    app = make_app(folder, tmp_path, "end")
+    p, _, data, csrf, spec = walk_to_screening(app, "phplay001", "hp-end")
+    r = p.submit(data, csrf, {"choices": n_correct_answer(spec, 6)}, played=False)
+    assert r.status_code == 422 and "please play every sound to the end" in r.get_json()["error"]
+
+
+def test_five_of_six_pass_and_the_study_goes_on(folder, tmp_path):
+    app = make_app(folder, tmp_path, "end")
+    p, _, data, csrf, spec = walk_to_screening(app, "phpass001", "hp-end")
+    assert p.submit(data, csrf, {"choices": n_correct_answer(spec, 5)}).status_code == 200
+    _, nxt, _ = p.page()
+    assert nxt["index"] == data["index"] + 1
+    with app.extensions["store"].Session() as db:
+        sess = db.get(ParticipantSession, p.sid)
+        assert sess.status == "active" and sess.failed_checks == 0
+
+
+def test_a_failed_screening_ends_the_session_with_the_failure_code(folder, tmp_path):
+    app = make_app(folder, tmp_path, "end")
+    p, _, data, csrf, spec = walk_to_screening(app, "phpfail01", "hp-end")
+    r = p.submit(data, csrf, {"choices": n_correct_answer(spec, 4)})
+    assert r.status_code == 200 and r.get_json()["session_status"] == "failed"
+    page, nothing, _ = p.page()
+    html = page.get_data(as_text=True)
+    assert nothing is None and "not listening over" in html and "FAIL5678" in html
+    with app.extensions["store"].Session() as db:
+        sess = db.get(ParticipantSession, p.sid)
+        assert (sess.status, sess.end_reason) == ("failed", "headphone_check")
+        assert db.get(Plan, sess.plan_id).status == "free"        # the plan goes to someone else
+    # the stored answer says what happened; the admin page lists the participant
+    client = app.test_client()
+    auth = {"Authorization": f"Bearer {h.ADMIN}"}
+    raw = json.loads(client.get("/admin/export/raw.json", headers=auth).get_data(as_text=True))
+    stored = [a["data"] for a in raw["answers"] if a["page"] == "headphones"]
+    assert stored == [{"choices": n_correct_answer(spec, 4), "correct": 4, "passed": False}]
+    admin = client.get("/admin/", headers=auth).get_data(as_text=True)
+    assert "phpfail01" in admin and "headphone_check" in admin
+    # a second try is refused
+    again = h.Participant(app.test_client(), "phpfail01", "hp-end").enter()
+    assert again.status_code == 409
+
+
+def test_on_fail_continue_only_records_the_outcome(folder, tmp_path):
+    app = make_app(folder, tmp_path, "cont")
+    p, _, data, csrf, spec = walk_to_screening(app, "phpcont01", "hp-cont")
+    assert p.submit(data, csrf, {"choices": n_correct_answer(spec, 0)}).status_code == 200
+    assert p.page()[1]["index"] == data["index"] + 1
+    client = app.test_client()
+    auth = {"Authorization": f"Bearer {h.ADMIN}"}
+    raw = json.loads(client.get("/admin/export/raw.json", headers=auth).get_data(as_text=True))
+    stored = [a["data"] for a in raw["answers"] if a["page"] == "headphones"]
+    assert stored[0]["correct"] == 0 and stored[0]["passed"] is False
+    # results.csv holds judgements only: no screening rows
+    rows = list(csv.DictReader(io.StringIO(client.get("/admin/export/results.csv", headers=auth)
+                                           .get_data(as_text=True))))
+    assert not any(r["page_type"] == "headphone_check" for r in rows)
