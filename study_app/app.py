@@ -52,8 +52,11 @@ def create_app(config: dict) -> Flask:
         JSON_SORT_KEYS=False,
     )
     if study.platform == "mturk":
-        # MTurk shows the study in an iframe: the cookie must be sent in a third-party context.
-        app.config.update(SESSION_COOKIE_SAMESITE="None", SESSION_COOKIE_SECURE=True)
+        # MTurk shows the study in an iframe on mturk.com, a third-party context. Browsers that
+        # block third-party cookies (Chromium's default in the browser test) drop a plain
+        # SameSite=None cookie there; a partitioned one (CHIPS), kept per top-level site, works.
+        app.config.update(SESSION_COOKIE_SAMESITE="None", SESSION_COOKIE_SECURE=True,
+                          SESSION_COOKIE_PARTITIONED=True)
     init = config.pop("INIT_DB", True)
     url = config.pop("DATABASE_URL", None)
     app.config.update(config)

@@ -418,6 +418,9 @@ def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
     r = client.get("/start/gesture-mturk?workerId=W1&assignmentId=A1&hitId=H1"
                    "&turkSubmitTo=https%3A%2F%2Fworkersandbox.mturk.com")
     assert r.status_code == 302
+    # usable inside MTurk's iframe, also where third-party cookies are blocked
+    cookie = r.headers["Set-Cookie"]
+    assert all(a in cookie for a in ("SameSite=None", "Secure", "Partitioned", "HttpOnly")), cookie
     sid = r.headers["Location"].split("/s/")[1].strip("/")
     p = h.Participant(client, "W1")
     p.sid = sid

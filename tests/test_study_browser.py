@@ -5,6 +5,9 @@ MUSHRA, 5-level pairwise and Likert pages playing every video, passes one attent
 fails another, reloads mid-study (and the server restarts) and resumes, finishes and gets the
 completion code; a second entry with the same ID cannot start over; a second participant
 fails two checks and gets the failure code; the admin export holds exactly the answers given.
+The page passes a headphone screening first, and asks to confirm a reload once started. An
+MTurk worker goes from the HIT preview to the external submit, and runs the study inside an
+iframe of an mturk.com page.
 Screenshots go to $STUDY_SCREENSHOTS (or the test's tmp dir).
 """
 from __future__ import annotations
@@ -16,6 +19,7 @@ import os
 import pathlib
 import re
 import threading
+import urllib.parse
 import urllib.request
 import zlib
 from types import SimpleNamespace
@@ -26,11 +30,15 @@ from werkzeug.serving import make_server
 
 import study_helpers as h
 from study_app import create_app
+from study_app.storage import ParticipantSession
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--no-first-run", "--disable-dev-shm-usage",
-        "--autoplay-policy=no-user-gesture-required"]
+        "--autoplay-policy=no-user-gesture-required",
+        # the MTurk test frames the loopback server in a (faked) public https page, which
+        # Chromium's local-network-access checks would refuse; a real study server is public
+        "--disable-features=LocalNetworkAccessChecks,BlockInsecurePrivateNetworkRequests"]
 
 
 class Server:
@@ -303,3 +311,68 @@ def test_narrow_window_is_gated(env):
     d.page.set_viewport_size({"width": 1200, "height": 800})
     d.page.wait_for_selector("#gate", state="hidden")
     assert d.page.is_enabled("#next")
+
+
+def test_mturk_hit_from_preview_to_external_submit(env):
+    """An MTurk worker: the preview creates nothing, the accepted HIT runs the study, and the
+    finish page's form posts the assignment and the code to the HIT's turkSubmitTo (caught
+    in the browser: the test never reaches MTurk)."""
+    text = h.STUDY_YAML.format(sessions=2).replace("platform: prolific", "platform: mturk").replace(
+        "id: gesture-test", "id: gesture-mturk")
+    h.make_study(env.folder, yaml_text=text, name="mturk.yaml")
+    db = f"sqlite:///{env.folder / 'mturk.db'}"
+    server = Server(lambda: create_app({
+        "STUDY": str(env.folder / "mturk.yaml"), "DATABASE_URL": db, "SECRET_KEY": h.SECRET,
+        "ADMIN_TOKEN": h.ADMIN, "INSTANCE_PATH": str(env.folder / "inst-mturk")}))
+    try:
+        d = Driver(SimpleNamespace(server=server, shots=env.shots, browser=env.browser), "A3MTURKWORKER1")
+        base = f"{server.url}/start/gesture-mturk?hitId=HIT42"
+        d.page.goto(base + "&assignmentId=ASSIGNMENT_ID_NOT_AVAILABLE")
+        assert d.page.is_visible("#preview") and "Accept the HIT" in d.page.content()
+        with server.app.extensions["store"].Session() as db_session:
+            assert db_session.query(ParticipantSession).count() == 0
+        d.page.goto(base + "&assignmentId=ASSIGN7&workerId=A3MTURKWORKER1"
+                    "&turkSubmitTo=https%3A%2F%2Fworkersandbox.mturk.com")
+        assert "/s/" in d.page.url
+        d.sid = d.page.url.split("/s/")[1].strip("/")
+        while d.page.locator("#page-data").count():
+            d.answer_page()
+        assert d.page.locator("#completion-code").text_content() == "DONE1234"
+        d.shot("mturk-finish")
+        posted = []
+
+        def external_submit(route):
+            posted.append((route.request.method, route.request.post_data))
+            route.fulfill(status=200, content_type="text/html", body="<p>HIT submitted</p>")
+        d.page.route("https://workersandbox.mturk.com/**", external_submit)
+        with d.page.expect_navigation():
+            d.page.click("form button[type=submit]")
+        assert "HIT submitted" in d.page.content()
+        method, body = posted[0]
+        form = dict(urllib.parse.parse_qsl(body))
+        assert method == "POST" and form == {"assignmentId": "ASSIGN7", "completion_code": "DONE1234"}
+        d.context.close()
+
+        # MTurk shows an ExternalQuestion in an iframe on its own https page: the study must
+        # allow that framing and its cookie must work there (SameSite=None; Secure; Partitioned).
+        w = Driver(SimpleNamespace(server=server, shots=env.shots, browser=env.browser), "A3MTURKWORKER2")
+        study_url = (base + "&assignmentId=ASSIGN8&workerId=A3MTURKWORKER2"
+                     "&turkSubmitTo=https%3A%2F%2Fworkersandbox.mturk.com")
+        host = "https://workersandbox.mturk.com/mturk/preview?groupId=G1"
+        w.page.route(host, lambda route: route.fulfill(
+            status=200, content_type="text/html",
+            body=f'<!doctype html><iframe src="{study_url}" width="1250" height="850"></iframe>'))
+        w.page.goto(host)
+        frame = w.page.frame_locator("iframe")
+        frame.locator("#agree").check()
+        frame.locator("#next:not([disabled])").click()
+        frame.locator("#q-age").wait_for()          # the next page, reached with the session cookie
+        child = w.page.main_frame.child_frames[0]
+        assert child.url.startswith(server.url + "/s/") and "/s/" in child.url
+        w.shot("mturk-in-iframe")
+        with server.app.extensions["store"].Session() as db_session:
+            sess = db_session.query(ParticipantSession).filter_by(participant="A3MTURKWORKER2").one()
+            assert sess.current_page == 1 and sess.platform_data["assignmentId"] == "ASSIGN8"
+        w.context.close()
+    finally:
+        server.stop()
