@@ -195,13 +195,7 @@ def test_stimulus_serving_is_limited_to_the_plan(study_dir, sqlite_url):
     app = make_app(study_dir, sqlite_url)
     p = h.Participant(app.test_client(), "ptrav0001")
     p.enter()
-    rng = np.random.default_rng(0)
-    pages = h.plan_pages(app, p.sid)
-    while True:   # walk to the first video page
-        _, data, csrf = p.page()
-        if data["videos"] and data["type"] != "headphone_check":
-            break
-        p.submit(data, csrf, h.make_answer(app.extensions["study"], pages[data["index"]], rng))
+    data, csrf, _ = _walk_to(app, p, "pairwise", np.random.default_rng(0))   # the first video page
     ok = p.client.get(data["videos"][0], headers={"Range": "bytes=0-99"})
     assert ok.status_code == 206 and ok.mimetype == "video/mp4" and len(ok.data) == 100
     first = sorted((study_dir / "stim").glob("*.mp4"))[0].name
@@ -452,14 +446,8 @@ def test_videos_must_be_played_before_answering(study_dir, sqlite_url):
     p = h.Participant(app.test_client(), "pplay0001")
     p.enter()
     rng = np.random.default_rng(0)
-    pages = h.plan_pages(app, p.sid)
-    study = app.extensions["study"]
-    while True:
-        _, data, csrf = p.page()
-        if data["videos"] and data["type"] != "headphone_check":
-            break
-        p.submit(data, csrf, h.make_answer(study, pages[data["index"]], rng))
-    answer = h.make_answer(study, pages[data["index"]], rng)
+    data, csrf, spec = _walk_to(app, p, "pairwise", rng)              # the first video page
+    answer = h.make_answer(app.extensions["study"], spec, rng)
     r = p.submit(data, csrf, answer, played=False)
     assert r.status_code == 422 and "play every video to the end" in r.get_json()["error"]
     only_one = [{"id": "evt-only-one", "kind": "ended", "slot": 0, "t": 1.0, "ms": 1}]
