@@ -28,7 +28,7 @@ def video(sid, index, slot):
     if not 0 <= slot < n_slots(page):
         abort(404)
     if page["type"] == "headphone_check":
-        # generated tones; conditional=True so browsers may fetch byte ranges as for videos
+        # generated tones, with byte ranges as for the videos (browsers ask for them)
         body = trial_wav(page["trials"][slot])
         resp = Response(body, mimetype="audio/wav")
         resp.headers["Cache-Control"] = "private, no-store"
