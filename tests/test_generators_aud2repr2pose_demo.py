@@ -1,0 +1,133 @@
+"""The published Aud2Repr2Pose demo model run with numpy, against the original pipeline's golden outputs.
+
+Golden arrays: ../shared/golden/aud2repr2pose-demo (the original code on TensorFlow 2.15 / Keras 2.15);
+model files: ../shared/weights/aud2repr2pose-demo (tests only, never in this repository).
+"""
+from __future__ import annotations
+
+import pathlib
+import shutil
+
+import numpy as np
+import pytest
+
+from evalsuite.errors import InputError
+from evalsuite.generators.aud2repr2pose_demo.model import (
+    POINT_NAMES, POINT_PARENTS, Aud2Repr2PoseDemo, DemoModelError, hard_sigmoid_keras2)
+from evalsuite.generators.aud2repr2pose_demo.tf1_checkpoint import CheckpointError, read_tf1_checkpoint
+
+SHARED = pathlib.Path(__file__).resolve().parents[1].parent / "shared"
+WEIGHTS = SHARED / "weights" / "aud2repr2pose-demo"
+GOLDEN = SHARED / "golden" / "aud2repr2pose-demo"
+needs_weights = pytest.mark.skipif(not (WEIGHTS / "Model_MFCC_Pros_Best.hdf5").is_file(),
+                                   reason=f"published demo model files not present at {WEIGHTS}")
+needs_golden = pytest.mark.skipif(not (GOLDEN / "latent_codes.npy").is_file(),
+                                  reason=f"golden outputs of the original demo not present at {GOLDEN}")
+
+
+@pytest.fixture(scope="module")
+def model() -> Aud2Repr2PoseDemo:
+    return Aud2Repr2PoseDemo.from_folder(WEIGHTS)
+
+
+def golden(name: str) -> np.ndarray:
+    return np.load(GOLDEN / name)
+
+
+def test_hard_sigmoid_is_keras2s_not_keras3s():
+    x = np.array([-3.0, -1.0, 0.0, 1.0, 2.5, 3.0], dtype=np.float32)
+    np.testing.assert_allclose(hard_sigmoid_keras2(x), [0.0, 0.3, 0.5, 0.7, 1.0, 1.0], atol=1e-7)
+
+
+def test_point_names_and_parents_follow_the_visualisers_order():
+    assert len(POINT_NAMES) == 46
+    assert POINT_NAMES[11] == "RightHand"
+    assert POINT_NAMES[30] == "LeftHand"
+    assert POINT_PARENTS[0] == -1
+    assert POINT_NAMES[POINT_PARENTS[10]] == "RightArm"
+    assert POINT_NAMES[POINT_PARENTS[13]] == "RightHandThumb1"
+    assert all(p < i for i, p in enumerate(POINT_PARENTS))
+
+
+@needs_weights
+def test_tf1_checkpoint_reader_reads_the_decoder_tensors():
+    tensors = read_tf1_checkpoint(WEIGHTS / "DAE_checkpoints")
+    assert tensors["AE_Variables/Variables/matrix2"].shape == (112, 138)
+    assert tensors["AE_Variables/Variables/matrix2"].dtype == np.float32
+    assert tensors["AE_Variables/Variables/bias2"].shape == (138,)
+    assert tensors["Train/global_step"].dtype == np.int64
+    # the .index path and the prefix name the same checkpoint
+    again = read_tf1_checkpoint(WEIGHTS / "DAE_checkpoints" / "chkpt-final.index")
+    np.testing.assert_array_equal(again["AE_Variables/Variables/bias2"], tensors["AE_Variables/Variables/bias2"])
+
+
+@needs_weights
+def test_corrupt_or_missing_checkpoint_files_give_precise_errors(tmp_path):
+    folder = tmp_path / "ckpt"
+    shutil.copytree(WEIGHTS / "DAE_checkpoints", folder)
+    (folder / "chkpt-final.data-00000-of-00001").unlink()
+    with pytest.raises(CheckpointError, match=r"chkpt-final\.data-00000-of-00001: checkpoint data file not found"):
+        read_tf1_checkpoint(folder)
+    index = folder / "chkpt-final.index"
+    data = bytearray(index.read_bytes())
+    data[-1] ^= 0xFF
+    index.chmod(0o644)
+    index.write_bytes(bytes(data))
+    with pytest.raises(CheckpointError, match="bad magic number"):
+        read_tf1_checkpoint(folder)
+    assert issubclass(CheckpointError, InputError)
+
+
+def test_missing_model_files_are_named(tmp_path):
+    (tmp_path / "max_val.npy").write_bytes(b"")
+    with pytest.raises(DemoModelError, match="lacks Model_MFCC_Pros_Best.hdf5, DAE_checkpoints, mean_pose.npy"):
+        Aud2Repr2PoseDemo.from_folder(tmp_path)
+
+
+@needs_weights
+@needs_golden
+def test_speech_encoder_reproduces_the_keras_model(model):
+    windows = golden("model_input_windows.npy")
+    np.testing.assert_allclose(model.encoder.gru_states(windows), golden("keras_gru_out.npy"), atol=2e-6, rtol=0)
+    np.testing.assert_allclose(model.encoder(windows), golden("latent_codes.npy"), atol=1e-5, rtol=0)
+
+
+@needs_weights
+@needs_golden
+def test_decoder_reproduces_each_stage_from_the_golden_codes(model):
+    codes = golden("latent_codes.npy")
+    assert len(codes) == 399
+    tanh = model.decoder(codes[:392])
+    np.testing.assert_allclose(tanh, golden("decoder_tanh_out.npy"), atol=1e-7, rtol=0)
+    unsmoothed = model.decode(codes, smooth=False)
+    assert unsmoothed.shape == (392, 138)  # the original drops the last 399 mod 8 = 7 frames
+    np.testing.assert_allclose(unsmoothed, golden("motion_unnormalised.npy"), atol=1e-5, rtol=0)
+    np.testing.assert_allclose(model.decode(codes), golden("gestures.npy"), atol=1e-5, rtol=0)
+
+
+@needs_weights
+@needs_golden
+def test_whole_model_from_windows_matches_the_original_within_float32_noise(model):
+    points = model(golden("model_input_windows.npy"))
+    assert points.shape == (392, 46, 3)
+    # The codes differ from Keras's by float32 summation order (<= 2.3e-6); max_val (up to 121 cm) amplifies
+    # that to ~1.2e-4 cm in the output: 1.2 micrometres, far below anything a metric can see.
+    np.testing.assert_allclose(points.reshape(392, 138), golden("gestures.npy"), atol=2.5e-4, rtol=0)
+    np.testing.assert_allclose(points[196, 11], [23.47319957, 26.63598257, -26.37929275], atol=2.5e-4)
+
+
+@needs_weights
+@needs_golden
+def test_stochastic_decoding_is_seeded_and_follows_tf1_dropout(model):
+    codes = golden("latent_codes.npy")
+    a = model.decode(codes, keep_prob=0.8, seed=1)
+    b = model.decode(codes, keep_prob=0.8, seed=1)
+    c = model.decode(codes, keep_prob=0.8, seed=2)
+    np.testing.assert_array_equal(a, b)
+    assert np.abs(a - c).max() > 0.1
+    # given the original's own dropped input (shipped sample A), the rest of the path matches it
+    dropped = golden("shipped_A_decoder_input_after_dropout.npy")
+    tanh = model.decoder(dropped)
+    np.testing.assert_allclose(tanh, golden("shipped_A_decoder_tanh_out.npy"), atol=1e-7, rtol=0)
+    with pytest.raises(ValueError, match="needs a seed"):
+        model.decode(codes, keep_prob=0.8)
