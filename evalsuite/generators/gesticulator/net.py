@@ -1,0 +1,117 @@
+"""The Gesticulator network, re-implemented from Kucherenko et al., "Gesticulator" (ICMI 2020), §4.
+
+Not the published system: a re-implementation from the paper, with sizes as options (the paper's values are
+the defaults of :class:`GesticulatorConfig`; CPU presets shrink them). Deviations are listed in
+``DEVIATIONS``.
+
+Per output frame t the model reads a window of speech frames t-10 ... t+19 (0.5 s past, 1 s future at 20 fps):
+
+1. each frame's features (audio ++ text) go through one shared feed-forward layer -> ``frame_dim`` (124);
+2. the window's encodings are concatenated (30 x 124 = 3720) and passed through fully connected layers
+   (612, 256) with tanh and dropout 0.2;
+3. FiLM (Perez et al. 2018): the previous 3 poses (dropout 0.8) are encoded into alpha and beta (2 x 256 =
+   512 values) and the 256-d activation becomes ``x * alpha + beta``;
+4. a final linear layer gives the pose (exponential maps of the modelled joints).
+
+Ablations of the paper's Table 2 are options: ``use_audio=False`` / ``use_text=False`` zero one input stream,
+``autoregressive=False`` drops the previous-pose conditioning, ``film=False`` concatenates the pose encoding
+to the activation instead of FiLM.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import torch
+from torch import nn
+
+__all__ = ["GesticulatorConfig", "GesticulatorNet", "DEVIATIONS"]
+
+DEVIATIONS = (
+    "Text features: word embeddings from an offline model installed with evalsuite (or a user-supplied path) "
+    "instead of BERT-base-cased fetched from a hub at run time.",
+    "Sizes are options; the CPU preset uses smaller layers than the paper's 124 / 612 / 256 / 512.",
+    "No PCA on the output (the paper's own ablation found PCA over-smoothed the motion).",
+)
+
+
+@dataclass(frozen=True)
+class GesticulatorConfig:
+    audio_dim: int
+    text_dim: int
+    pose_dim: int
+    past: int = 10            # speech frames before the current one (0.5 s at 20 fps)
+    future: int = 20          # speech frames after it (1 s)
+    frame_dim: int = 124      # per-frame speech encoding
+    hidden: tuple[int, ...] = (612, 256)
+    n_prev_poses: int = 3
+    film_dim: int = 512       # alpha and beta together (2 x hidden[-1])
+    dropout: float = 0.2
+    prev_pose_dropout: float = 0.8
+    use_audio: bool = True
+    use_text: bool = True
+    autoregressive: bool = True
+    film: bool = True
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def window(self) -> int:
+        return self.past + 1 + self.future
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["hidden"] = list(self.hidden)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> GesticulatorConfig:
+        d = dict(d)
+        d["hidden"] = tuple(d["hidden"])
+        return cls(**d)
+
+
+class GesticulatorNet(nn.Module):
+    """speech window (B, W, A+X) and previous poses (B, P, D) -> pose (B, D)."""
+
+    def __init__(self, config: GesticulatorConfig):
+        super().__init__()
+        self.config = c = config
+        self.frame_encoder = nn.Sequential(nn.Linear(c.audio_dim + c.text_dim, c.frame_dim), nn.Tanh(),
+                                           nn.Dropout(c.dropout))
+        layers: list[nn.Module] = []
+        width = c.window * c.frame_dim
+        for h in c.hidden:
+            layers += [nn.Linear(width, h), nn.Tanh(), nn.Dropout(c.dropout)]
+            width = h
+        self.speech_layers = nn.Sequential(*layers)
+        self.hidden_width = width
+        if c.autoregressive:
+            cond_out = 2 * width if c.film else c.film_dim // 2
+            self.pose_encoder = nn.Sequential(nn.Dropout(c.prev_pose_dropout),
+                                              nn.Linear(c.n_prev_poses * c.pose_dim, c.film_dim), nn.Tanh(),
+                                              nn.Linear(c.film_dim, cond_out))
+            out_in = width if c.film else width + cond_out
+        else:
+            out_in = width
+        self.output = nn.Linear(out_in, c.pose_dim)
+        mask = torch.ones(c.audio_dim + c.text_dim)
+        if not c.use_audio:
+            mask[: c.audio_dim] = 0
+        if not c.use_text:
+            mask[c.audio_dim:] = 0
+        self.register_buffer("input_mask", mask)
+
+    def forward(self, speech: torch.Tensor, prev_poses: torch.Tensor | None = None) -> torch.Tensor:
+        c = self.config
+        b = speech.shape[0]
+        x = self.frame_encoder(speech * self.input_mask).reshape(b, -1)
+        x = self.speech_layers(x)
+        if c.autoregressive:
+            if prev_poses is None:
+                raise ValueError("an autoregressive Gesticulator needs the previous poses")
+            cond = self.pose_encoder(prev_poses.reshape(b, -1))
+            if c.film:
+                alpha, beta = cond.chunk(2, dim=-1)
+                x = x * alpha + beta
+            else:
+                x = torch.cat([x, cond], dim=-1)
+        return self.output(x)

@@ -1,0 +1,223 @@
+"""Training and autoregressive generation for the Gesticulator re-implementation, on plain arrays.
+
+Arrays per segment, all at the model's frame rate (20 fps in the paper):
+``speech``: (T, A + X) audio features followed by text features; ``poses``: (T, D) exponential maps.
+
+The paper's schedule (§4.3): sequences of 70 frames (10 past context, 40 predicted, 20 future context);
+loss = MSE(pose) + 0.6 MSE(velocity) on the 40 predicted frames; Adam, learning rate 1e-4, batch 64;
+the first 7 epochs without autoregression (the previous-pose input is zeroed), then autoregression with
+teacher forcing that is withdrawn: the model's own predictions replace the ground truth for two
+consecutive frames every 16 frames, then every 8, every 4, and finally always. Stage lengths are options
+(``TrainSchedule``) so that a CPU budget can keep the order of the stages with fewer epochs.
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from torch import nn
+
+from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
+
+__all__ = ["TrainSchedule", "Normaliser", "TrainedGesticulator", "train_gesticulator", "generate_poses",
+           "make_sequences", "velocity_weight"]
+
+velocity_weight = 0.6  # alpha of the paper's loss (2)
+
+
+@dataclass(frozen=True)
+class TrainSchedule:
+    """Epochs per stage, in the paper's order. ``teacher_periods`` are the successive periods (in frames) at
+    which the model's own prediction replaces the ground truth; 1 = always its own prediction."""
+
+    pretrain_epochs: int = 7
+    teacher_periods: tuple[int, ...] = (16, 8, 4)
+    free_epochs: int = 85        # autoregressive epochs without teacher forcing (100 epochs in all)
+    batch_size: int = 64
+    learning_rate: float = 1e-4
+    sequence: int = 70           # frames per training sequence: past + predicted + future
+    stride: int = 10             # between training sequences (4x overlap of the predicted frames)
+
+    @property
+    def epochs(self) -> int:
+        return self.pretrain_epochs + len(self.teacher_periods) + self.free_epochs
+
+    def stage(self, epoch: int) -> tuple[bool, int]:
+        """(autoregressive?, own-prediction period) for a zero-based epoch."""
+        if epoch < self.pretrain_epochs:
+            return False, 0
+        k = epoch - self.pretrain_epochs
+        if k < len(self.teacher_periods):
+            return True, self.teacher_periods[k]
+        return True, 1
+
+
+@dataclass
+class Normaliser:
+    """Per-dimension standardisation fitted on the training split (std floored to avoid division by ~0)."""
+
+    mean: np.ndarray
+    std: np.ndarray
+
+    @classmethod
+    def fit(cls, arrays: Sequence[np.ndarray]) -> Normaliser:
+        x = np.concatenate(arrays, axis=0)
+        return cls(x.mean(axis=0), np.maximum(x.std(axis=0), 1e-6))
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return ((x - self.mean) / self.std).astype(np.float32)
+
+    def inverse(self, x: np.ndarray) -> np.ndarray:
+        return np.asarray(x, dtype=np.float64) * self.std + self.mean
+
+
+@dataclass
+class TrainedGesticulator:
+    net: GesticulatorNet
+    speech_norm: Normaliser
+    pose_norm: Normaliser
+    history: list[dict]
+
+
+def make_sequences(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], config: GesticulatorConfig,
+                   length: int, stride: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cut every segment into overlapping sequences -> (N, length, A+X), (N, length, D).
+
+    Segments are padded at both ends (speech by zeros = the training mean after standardisation, poses by
+    their first/last frame) so that every frame of a segment is predicted once in some sequence."""
+    xs, ys = [], []
+    for s, p in zip(speech, poses):
+        s = np.concatenate([np.zeros((config.past, s.shape[1]), np.float32), s,
+                            np.zeros((config.future, s.shape[1]), np.float32)])
+        p = np.concatenate([np.repeat(p[:1], config.past, 0), p, np.repeat(p[-1:], config.future, 0)])
+        for start in range(0, max(len(s) - length, 0) + 1, stride):
+            if start + length <= len(s):
+                xs.append(s[start:start + length])
+                ys.append(p[start:start + length])
+    if not xs:
+        raise ValueError(f"no segment is long enough for {length}-frame training sequences")
+    return np.stack(xs), np.stack(ys)
+
+
+def _rollout(net: GesticulatorNet, x: torch.Tensor, y: torch.Tensor, autoregressive: bool,
+             period: int) -> torch.Tensor:
+    """Predict frames past .. len-future-1 of each sequence; returns (B, n_predicted, D)."""
+    c = net.config
+    b, length, _ = x.shape
+    n_pred = length - c.past - c.future
+    prev = y[:, c.past - c.n_prev_poses:c.past].clone()
+    if not autoregressive:
+        prev = torch.zeros_like(prev)
+    outputs = []
+    for k in range(n_pred):
+        t = c.past + k
+        out = net(x[:, t - c.past:t + c.future + 1], prev if c.autoregressive else None)
+        outputs.append(out)
+        if autoregressive:
+            # own prediction for two consecutive frames every `period` frames (period 1: always)
+            own = period == 1 or (k % period) < 2
+            nxt = out if own else y[:, t]
+        else:
+            nxt = torch.zeros_like(out)
+        prev = torch.cat([prev[:, 1:], nxt.unsqueeze(1)], dim=1)
+    return torch.stack(outputs, dim=1)
+
+
+def _loss(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    mse = nn.functional.mse_loss(pred, target)
+    vel = nn.functional.mse_loss(pred[:, 1:] - pred[:, :-1], target[:, 1:] - target[:, :-1])
+    return mse + velocity_weight * vel
+
+
+def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], config: GesticulatorConfig,
+                       schedule: TrainSchedule = TrainSchedule(), *, seed: int = 0,
+                       val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
+                       budget_seconds: float | None = None,
+                       on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
+    """Train on segments of (speech (T, A+X), poses (T, D)); deterministic for a seed on one machine.
+
+    With ``budget_seconds`` the schedule is compressed so that its stages still run in order: training stops
+    when the budget is spent, and the history says so."""
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    speech_norm, pose_norm = Normaliser.fit(speech), Normaliser.fit(poses)
+    x, y = make_sequences([speech_norm(s) for s in speech], [pose_norm(p) for p in poses], config,
+                          schedule.sequence, schedule.stride)
+    xt, yt = torch.from_numpy(x), torch.from_numpy(y)
+    val = None
+    if len(val_speech):
+        vx, vy = make_sequences([speech_norm(s) for s in val_speech], [pose_norm(p) for p in val_poses],
+                                config, schedule.sequence, schedule.sequence - config.past - config.future)
+        val = torch.from_numpy(vx), torch.from_numpy(vy)
+    net = GesticulatorNet(config)
+    opt = torch.optim.Adam(net.parameters(), lr=schedule.learning_rate)
+    history: list[dict] = []
+    start = time.perf_counter()
+    for epoch in range(schedule.epochs):
+        autoregressive, period = schedule.stage(epoch)
+        net.train()
+        order = rng.permutation(len(xt))
+        total, n = 0.0, 0
+        for i in range(0, len(order), schedule.batch_size):
+            idx = torch.from_numpy(order[i:i + schedule.batch_size])
+            xb, yb = xt[idx], yt[idx]
+            pred = _rollout(net, xb, yb, autoregressive and config.autoregressive, period)
+            loss = _loss(pred, yb[:, config.past:schedule.sequence - config.future])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+            n += len(idx)
+        record = {"epoch": epoch + 1, "stage": "pretrain" if not autoregressive else
+                  ("autoregressive" if period == 1 else f"teacher forcing 1/{period}"),
+                  "train_loss": total / n, "seconds": time.perf_counter() - start}
+        if val is not None:
+            net.eval()
+            with torch.no_grad():
+                vpred = _rollout(net, val[0], val[1], config.autoregressive, 1)
+                record["val_loss"] = float(_loss(vpred, val[1][:, config.past:schedule.sequence - config.future]))
+        history.append(record)
+        if on_epoch is not None:
+            on_epoch(record)
+        if budget_seconds is not None and time.perf_counter() - start > budget_seconds:
+            record["stopped"] = "time budget spent"
+            break
+    net.eval()
+    return TrainedGesticulator(net, speech_norm, pose_norm, history)
+
+
+@torch.no_grad()
+def generate_poses(model: TrainedGesticulator, speech: Sequence[np.ndarray],
+                   initial_pose: np.ndarray | None = None) -> list[np.ndarray]:
+    """Autoregressive generation for several segments at once -> list of (T, D) poses (unnormalised).
+
+    The first previous poses are the training mean pose (as the original initialises with its mean pose)."""
+    net, c = model.net, model.net.config
+    net.eval()
+    lengths = [len(s) for s in speech]
+    t_max = max(lengths)
+    feats = np.zeros((len(speech), c.past + t_max + c.future, speech[0].shape[1]), np.float32)
+    for i, s in enumerate(speech):
+        feats[i, c.past:c.past + len(s)] = model.speech_norm(s)
+    x = torch.from_numpy(feats)
+    start = np.zeros(c.pose_dim, np.float32) if initial_pose is None else model.pose_norm(initial_pose)
+    prev = torch.from_numpy(np.tile(start, (len(speech), c.n_prev_poses, 1)).astype(np.float32))
+    out = torch.empty(len(speech), t_max, c.pose_dim)
+    for t in range(t_max):
+        pose = net(x[:, t:t + c.window], prev if c.autoregressive else None)
+        out[:, t] = pose
+        prev = torch.cat([prev[:, 1:], pose.unsqueeze(1)], dim=1)
+    return [model.pose_norm.inverse(out[i, :n].numpy()) for i, n in enumerate(lengths)]
+
+
+def budgeted_schedule(epochs: int) -> TrainSchedule:
+    """The paper's stage order squeezed into ``epochs`` epochs (>= 5): about 7 % pretraining, one epoch per
+    teacher-forcing period, the rest autoregressive without teacher forcing."""
+    if epochs < 5:
+        raise ValueError("the schedule needs at least 5 epochs (pretraining, 3 teacher-forcing stages, free)")
+    pretrain = max(1, math.ceil(0.07 * epochs))
+    return TrainSchedule(pretrain_epochs=pretrain, free_epochs=epochs - pretrain - 3)
