@@ -1,0 +1,215 @@
+"""Training and generation for Aud2Pose, Aud2Motion and Aud2Repr2Pose on plain arrays.
+
+Arrays per segment at the model's frame rate (20 fps in the paper): ``speech`` (T, F) features (26 MFCC,
+optionally + prosody), ``poses`` (T, D). Hyper-parameters default to the paper's (§4.3): Adam 1e-3; the
+speech network's batch 2056 and MSE; the autoencoder's batch 128, 20 epochs, noise 0.05 x feature std.
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from torch import nn
+
+from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
+
+__all__ = ["MaxAbsScaler", "Standardiser", "TrainedSystem", "train_dae", "train_system", "generate",
+           "SYSTEMS"]
+
+# system name -> (uses the autoencoder's representation?, speech network overrides)
+SYSTEMS: dict[str, tuple[bool, dict]] = {
+    "aud2pose": (False, {}),
+    "aud2motion": (False, {"bidirectional": False, "form": "sequence", "velocity_target": False}),
+    "aud2repr2pose": (True, {"velocity_target": False}),
+}
+
+
+@dataclass
+class MaxAbsScaler:
+    """Mean 0 and maximum absolute value 1 per dimension (the paper's motion normalisation)."""
+
+    mean: np.ndarray
+    scale: np.ndarray
+
+    @classmethod
+    def fit(cls, arrays: Sequence[np.ndarray]) -> MaxAbsScaler:
+        x = np.concatenate(arrays)
+        mean = x.mean(0)
+        return cls(mean, np.maximum(np.abs(x - mean).max(0), 1e-6))
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return ((x - self.mean) / self.scale).astype(np.float32)
+
+    def inverse(self, x: np.ndarray) -> np.ndarray:
+        return np.asarray(x, np.float64) * self.scale + self.mean
+
+
+@dataclass
+class Standardiser:
+    mean: np.ndarray
+    std: np.ndarray
+
+    @classmethod
+    def fit(cls, arrays: Sequence[np.ndarray]) -> Standardiser:
+        x = np.concatenate(arrays)
+        return cls(x.mean(0), np.maximum(x.std(0), 1e-6))
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return ((x - self.mean) / self.std).astype(np.float32)
+
+
+@dataclass
+class TrainedSystem:
+    system: str
+    speech_net: SpeechNet
+    speech_norm: Standardiser
+    pose_norm: MaxAbsScaler
+    dae: MotionDAE | None = None
+    history: list[dict] = field(default_factory=list)
+
+
+def _epochs(n_items: int, batch: int, rng: np.random.Generator):
+    order = rng.permutation(n_items)
+    for i in range(0, n_items, batch):
+        yield torch.from_numpy(order[i:i + batch])
+
+
+def train_dae(poses: Sequence[np.ndarray], code_dim: int, *, epochs: int = 20, batch_size: int = 128,
+              learning_rate: float = 1e-3, noise: float = 0.05, seed: int = 0,
+              on_epoch: Callable[[dict], None] | None = None) -> MotionDAE:
+    """MotionE/MotionD on normalised poses (N, D): denoising reconstruction with MSE."""
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    x = torch.from_numpy(np.concatenate(poses).astype(np.float32))
+    dae = MotionDAE(x.shape[1], code_dim, noise)
+    dae.feature_std.copy_(x.std(0).clamp_min(1e-6))
+    opt = torch.optim.Adam(dae.parameters(), lr=learning_rate)
+    for epoch in range(epochs):
+        dae.train()
+        total = 0.0
+        for idx in _epochs(len(x), batch_size, rng):
+            loss = nn.functional.mse_loss(dae(x[idx]), x[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+        if on_epoch is not None:
+            on_epoch({"stage": "autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)})
+    dae.eval()
+    return dae
+
+
+def _windows(speech: np.ndarray, context: int) -> np.ndarray:
+    """(T, F) -> (T, 2C+1, F): frame t's window t-C .. t+C, zero-padded (zero = training mean)."""
+    padded = np.concatenate([np.zeros((context, speech.shape[1]), np.float32), speech,
+                             np.zeros((context, speech.shape[1]), np.float32)])
+    return np.lib.stride_tricks.sliding_window_view(padded, 2 * context + 1, axis=0).transpose(0, 2, 1)
+
+
+def _chunks(x: np.ndarray, length: int) -> list[np.ndarray]:
+    return [x[i:i + length] for i in range(0, len(x) - length + 1, length // 2)] or [x]
+
+
+
+def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], *,
+                 config: dict | None = None, code_dim: int = 40, dae_epochs: int = 20, epochs: int = 120,
+                 batch_size: int = 2056, learning_rate: float = 1e-3, chunk: int = 100, seed: int = 0,
+                 val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
+                 budget_seconds: float | None = None,
+                 on_epoch: Callable[[dict], None] | None = None) -> TrainedSystem:
+    """Train one of ``SYSTEMS`` on segments; deterministic for a seed on one machine."""
+    if system not in SYSTEMS:
+        raise ValueError(f"unknown system {system!r}; expected one of {', '.join(SYSTEMS)}")
+    uses_repr, overrides = SYSTEMS[system]
+    start = time.perf_counter()
+    speech_norm, pose_norm = Standardiser.fit(speech), MaxAbsScaler.fit(poses)
+    xs = [speech_norm(s) for s in speech]
+    ys = [pose_norm(p) for p in poses]
+    dae = None
+    if uses_repr:
+        dae = train_dae(ys, code_dim, epochs=dae_epochs, seed=seed, on_epoch=on_epoch)
+        with torch.no_grad():
+            ys = [dae.encode(torch.from_numpy(y)).numpy() for y in ys]
+    base = {"input_dim": xs[0].shape[1], "output_dim": ys[0].shape[1], **overrides, **(config or {})}
+    net_config = SpeechNetConfig(**base)
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    net = SpeechNet(net_config)
+    opt = torch.optim.Adam(net.parameters(), lr=learning_rate)
+    vel = net_config.velocity_target
+
+    def dataset(xl: Sequence[np.ndarray], yl: Sequence[np.ndarray]) -> tuple[torch.Tensor, torch.Tensor]:
+        if net_config.form == "windowed":
+            x = np.concatenate([_windows(x, net_config.context) for x in xl])
+            y = np.concatenate([np.concatenate([y, np.diff(y, axis=0, prepend=y[:1])], 1) if vel else y
+                                for y in yl])
+            return torch.from_numpy(np.ascontiguousarray(x)), torch.from_numpy(y.astype(np.float32))
+        xc = [c for x in xl for c in _chunks(x, chunk) if len(c) == chunk]
+        yc = [c for y in yl for c in _chunks(y, chunk) if len(c) == chunk]
+        y = np.stack(yc)
+        if vel:
+            y = np.concatenate([y, np.diff(y, axis=1, prepend=y[:, :1])], -1)
+        return torch.from_numpy(np.stack(xc)), torch.from_numpy(y.astype(np.float32))
+
+    xt, yt = dataset(xs, ys)
+    val = None
+    if len(val_speech):
+        vy = [pose_norm(p) for p in val_poses]
+        if dae is not None:
+            with torch.no_grad():
+                vy = [dae.encode(torch.from_numpy(y)).numpy() for y in vy]
+        val = dataset([speech_norm(s) for s in val_speech], vy)
+    history: list[dict] = []
+    for epoch in range(epochs):
+        net.train()
+        total = 0.0
+        for idx in _epochs(len(xt), batch_size, rng):
+            if len(idx) < 2:  # batch normalisation needs two samples
+                continue
+            loss = nn.functional.mse_loss(net(xt[idx]), yt[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+        record = {"stage": "speech", "epoch": epoch + 1, "train_loss": total / len(xt),
+                  "seconds": time.perf_counter() - start}
+        if val is not None:
+            net.eval()
+            with torch.no_grad():
+                record["val_loss"] = float(nn.functional.mse_loss(net(val[0]), val[1]))
+        history.append(record)
+        if on_epoch is not None:
+            on_epoch(record)
+        if budget_seconds is not None and time.perf_counter() - start > budget_seconds:
+            record["stopped"] = "time budget spent"
+            break
+    net.eval()
+    return TrainedSystem(system, net, speech_norm, pose_norm, dae, history)
+
+
+@torch.no_grad()
+def generate(model: TrainedSystem, speech: np.ndarray, batch: int = 4096) -> np.ndarray:
+    """(T, F) speech features -> (T, D) poses in the training data's units."""
+    net, c = model.speech_net, model.speech_net.config
+    net.eval()
+    x = model.speech_norm(speech)
+    if c.form == "windowed":
+        w = _windows(x, c.context)
+        out = torch.cat([net(torch.from_numpy(np.ascontiguousarray(w[i:i + batch])))
+                         for i in range(0, len(w), batch)])
+    else:
+        out = net(torch.from_numpy(x)[None])[0]
+    out = out[:, :c.output_dim]
+    if model.dae is not None:
+        out = model.dae.decode(out)
+    return model.pose_norm.inverse(out.numpy())
+
+
+def with_form(system: str, form: str) -> tuple[bool, dict]:
+    """The overrides of ``system`` with another speech-network form (e.g. the sequence-level deviation)."""
+    uses_repr, overrides = SYSTEMS[system]
+    return uses_repr, {**overrides, "form": form}
+
