@@ -1,0 +1,210 @@
+"""Training and generation for the Gesture2Vec re-implementation, on plain arrays.
+
+Per segment: ``poses`` (T, D) at the model's frame rate and ``words``: a list of (embedding (E,), start
+seconds). Training runs the paper's three stages in order (§4): the frame autoencoder, the VQ-DVAE (then its
+decoder alone, with the rest frozen: the paper's "weakened decoder" schedule), and the translation model.
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from torch import nn
+
+from evalsuite.generators.gesture2vec.net import FrameDAE, G2VConfig, Translator, VQDVAE
+
+__all__ = ["G2VStages", "TrainedG2V", "train_gesture2vec", "generate_gesture2vec", "code_perplexity",
+           "WordTrack"]
+
+WordTrack = Sequence[tuple[np.ndarray, float]]   # (embedding, start time in seconds) per word
+
+
+@dataclass(frozen=True)
+class G2VStages:
+    dae_epochs: int = 20
+    vq_epochs: int = 20
+    vq_decoder_epochs: int = 20
+    translation_epochs: int = 250
+    learning_rate: float = 1e-3
+    translation_learning_rate: float = 1e-3
+    batch_size: int = 128
+
+
+@dataclass
+class TrainedG2V:
+    config: G2VConfig
+    fps: float
+    dae: FrameDAE
+    vq: VQDVAE
+    translator: Translator
+    pose_mean: np.ndarray
+    pose_scale: np.ndarray
+    code_counts: np.ndarray
+    history: list[dict] = field(default_factory=list)
+    train_chunks: dict[int, list[np.ndarray]] = field(default_factory=dict)  # for retrieval decoding
+
+
+def code_perplexity(counts: np.ndarray) -> float:
+    """exp(entropy) of the code-usage distribution: K when every code is used equally, 1 when one is."""
+    p = counts / max(counts.sum(), 1)
+    p = p[p > 0]
+    return float(np.exp(-(p * np.log(p)).sum()))
+
+
+def _batches(n: int, size: int, rng: np.random.Generator):
+    order = rng.permutation(n)
+    for i in range(0, n, size):
+        yield torch.from_numpy(order[i:i + size])
+
+
+def _latent_chunks(latent: np.ndarray, chunk: int, stride: int) -> np.ndarray:
+    feat = np.concatenate([latent, np.diff(latent, axis=0, prepend=latent[:1])], axis=1)
+    starts = range(0, len(feat) - chunk + 1, stride)
+    return np.stack([feat[s:s + chunk] for s in starts]) if len(starts) else np.zeros((0, chunk, feat.shape[1]))
+
+
+def _window_words(words: WordTrack, start: float, length: float, text_dim: int) -> np.ndarray:
+    rows = [np.concatenate([emb, [(t - start) / length]]) for emb, t in words if start <= t < start + length]
+    return np.asarray(rows, np.float32).reshape(-1, text_dim + 1)
+
+
+def _pad_words(items: list[np.ndarray], text_dim: int) -> tuple[torch.Tensor, torch.Tensor]:
+    width = max(1, max(len(w) for w in items))
+    x = np.zeros((len(items), width, text_dim + 1), np.float32)
+    mask = np.zeros((len(items), width), bool)
+    for i, w in enumerate(items):
+        x[i, :len(w)] = w
+        mask[i, :len(w)] = True
+        if not len(w):
+            mask[i, 0] = True  # an empty window attends to one zero row (silence)
+    return torch.from_numpy(x), torch.from_numpy(mask)
+
+
+def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], config: G2VConfig, fps: float,
+                      stages: G2VStages = G2VStages(), *, seed: int = 0,
+                      on_epoch: Callable[[dict], None] | None = None) -> TrainedG2V:
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    history: list[dict] = []
+    start_time = time.perf_counter()
+
+    def log(record: dict) -> None:
+        record["seconds"] = time.perf_counter() - start_time
+        history.append(record)
+        if on_epoch is not None:
+            on_epoch(record)
+
+    allp = np.concatenate(poses)
+    mean = allp.mean(0)
+    scale = np.maximum(np.abs(allp - mean).max(0), 1e-6)  # mean 0, max |x| 1 (paper §4.1)
+    norm = [((p - mean) / scale).astype(np.float32) for p in poses]
+    # 1. frame autoencoder
+    dae = FrameDAE(config)
+    x = torch.from_numpy(np.concatenate(norm))
+    opt = torch.optim.Adam(dae.parameters(), lr=stages.learning_rate)
+    for epoch in range(stages.dae_epochs):
+        dae.train()
+        total = 0.0
+        for idx in _batches(len(x), stages.batch_size, rng):
+            loss = nn.functional.mse_loss(dae(x[idx]), x[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+        log({"stage": "frame autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)})
+    dae.eval()
+    with torch.no_grad():
+        latents = [dae.encoder(torch.from_numpy(p)).numpy() for p in norm]
+    # 2. VQ-DVAE, then its decoder alone
+    chunks = np.concatenate([_latent_chunks(lat, config.chunk, config.stride) for lat in latents])
+    if not len(chunks):
+        raise ValueError(f"no segment has {config.chunk} frames for a VQ-DVAE chunk")
+    ct = torch.from_numpy(chunks.astype(np.float32))
+    vq = VQDVAE(config)
+    # start the codebook from encoder outputs of random chunks, so that no code starts unused
+    with torch.no_grad():
+        z0 = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), config.codebook, replace=len(ct) < config.codebook))])
+        vq.codebook.weight.copy_(z0 + 0.01 * torch.randn_like(z0))
+    opt = torch.optim.Adam(vq.parameters(), lr=stages.learning_rate)
+    for epoch in range(stages.vq_epochs + stages.vq_decoder_epochs):
+        decoder_only = epoch >= stages.vq_epochs
+        if decoder_only and epoch == stages.vq_epochs:
+            for p in [*vq.encoder.parameters(), *vq.codebook.parameters()]:
+                p.requires_grad_(False)
+            opt = torch.optim.Adam([*vq.decoder.parameters(), *vq.out.parameters()], lr=stages.learning_rate)
+        vq.train()
+        total, counts = 0.0, np.zeros(config.codebook)
+        for idx in _batches(len(ct), stages.batch_size, rng):
+            recon, codes, vq_loss = vq(ct[idx])
+            loss = nn.functional.mse_loss(recon, ct[idx]) + (0 if decoder_only else vq_loss)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+            counts += np.bincount(codes.numpy(), minlength=config.codebook)
+        log({"stage": "vq-dvae decoder" if decoder_only else "vq-dvae", "epoch": epoch + 1,
+             "train_loss": total / len(ct), "perplexity": code_perplexity(counts)})
+    vq.eval()
+    # 3. translation: word windows -> codes of the window's non-overlapping chunks
+    win = config.chunk * config.chunks_per_window
+    srcs, tgts, train_chunks = [], [], {}
+    with torch.no_grad():
+        for lat, track, p in zip(latents, words, norm):
+            for s in range(0, len(lat) - win + 1, config.chunk):
+                feats = _latent_chunks(lat[s:s + win], config.chunk, config.chunk)
+                codes = vq.quantise(vq.encode(torch.from_numpy(feats.astype(np.float32)))).numpy()
+                srcs.append(_window_words(track, s / fps, win / fps, config.text_dim))
+                tgts.append(codes)
+                for k, code in enumerate(codes):
+                    train_chunks.setdefault(int(code), []).append(p[s + k * config.chunk:s + (k + 1) * config.chunk])
+    if not srcs:
+        raise ValueError(f"no segment has {win} frames for a translation window")
+    code_counts = np.bincount(np.concatenate(tgts), minlength=config.codebook)
+    translator = Translator(config)
+    opt = torch.optim.Adam(translator.parameters(), lr=stages.translation_learning_rate)
+    targets = torch.from_numpy(np.stack(tgts).astype(np.int64))
+    for epoch in range(stages.translation_epochs):
+        translator.train()
+        total = 0.0
+        for idx in _batches(len(srcs), stages.batch_size, rng):
+            wx, mask = _pad_words([srcs[i] for i in idx.tolist()], config.text_dim)
+            logits = translator(wx, mask, targets[idx])
+            loss = nn.functional.cross_entropy(logits.reshape(-1, config.codebook), targets[idx].reshape(-1))
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+        log({"stage": "translation", "epoch": epoch + 1, "train_loss": total / len(srcs)})
+    translator.eval()
+    return TrainedG2V(config, fps, dae, vq, translator, mean, scale, code_counts, history, train_chunks)
+
+
+@torch.no_grad()
+def generate_gesture2vec(model: TrainedG2V, words: WordTrack, n_frames: int, *, seed: int = 0,
+                         temperature: float = 0.0, retrieval: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (n_frames, D) and the predicted codes for one segment.
+
+    Generative decoding: codes -> VQ-DVAE decoder -> frame decoder. With ``retrieval`` each code is replaced
+    by a random training chunk of that code (the original repository's decoding), seeded."""
+    c = model.config
+    win = c.chunk * c.chunks_per_window
+    n_windows = max(1, -(-n_frames // win))
+    gen = torch.Generator().manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    srcs = [_window_words(words, w * win / model.fps, win / model.fps, c.text_dim) for w in range(n_windows)]
+    wx, mask = _pad_words(srcs, c.text_dim)
+    codes = model.translator.generate(wx, mask, c.chunks_per_window, gen, temperature).reshape(-1)
+    if retrieval:
+        pieces = []
+        for code in codes.tolist():
+            pool = model.train_chunks.get(int(code))
+            pieces.append(pool[int(rng.integers(len(pool)))] if pool else np.zeros((c.chunk, c.pose_dim), np.float32))
+        norm = np.concatenate(pieces)
+    else:
+        latent = model.vq.decode(model.vq.codebook(codes))[..., :c.latent_dim]
+        norm = model.dae.decoder(latent.reshape(-1, c.latent_dim)).numpy()
+    poses = norm[:n_frames] * model.pose_scale + model.pose_mean
+    return poses.astype(np.float64), codes.numpy()
