@@ -1,0 +1,272 @@
+"""Training of the Ferstl et al. (MIG 2019) re-implementation on plain arrays, in the paper's stages (§4-7).
+
+Per segment at 20 fps: ``speech`` (T, 27) = 26 MFCC + F0 (pitch in the last column), ``positions`` (T, 3J),
+``phases`` (T,) integer labels in ``PHASES`` order (for the phase classifier), and ``arm_columns``: the
+columns of ``positions`` whose per-frame offsets the classifier and the displacement discriminator read.
+
+Stages: (1) the phase classifier on labelled data (cross-entropy; its weighted F1 on held-out data is
+reported); (2) the generator pre-trained with MSE, with snapshots of its weights kept as its "training
+history"; (3) the phase discriminator pre-trained against that history, moving to the next snapshot once it is
+right on at least 70 % of three batches in a row; (4) the motion-realism discriminator pre-trained against a
+fresh generator; (5) adversarial training with RMSprop, the generator's loss the 2:4:4:1-weighted mean over
+the phase, realism, minibatch and displacement discriminators, and one MSE correction step (with the
+discontinuity penalty between consecutive sequences) per two adversarial steps.
+"""
+from __future__ import annotations
+
+import copy
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from torch import nn
+
+from evalsuite.generators.ferstl_mogan.net import (
+    Generator, MinibatchDiscriminator, MoganConfig, PhaseClassifier, SequenceDiscriminator)
+
+__all__ = ["MoganStages", "TrainedMogan", "train_mogan", "generate_mogan", "weighted_f1", "WEIGHTS"]
+
+WEIGHTS = {"phase": 2.0, "realism": 4.0, "minibatch": 4.0, "displacement": 1.0}  # eq. (3)
+
+
+@dataclass(frozen=True)
+class MoganStages:
+    classifier_epochs: int = 30
+    pretrain_epochs: int = 30
+    snapshots: int = 6
+    realism_pretrain_steps: int = 100
+    adversarial_steps: int = 1000
+    batch_size: int = 32
+    learning_rate: float = 1e-3
+    adversarial_learning_rate: float = 1e-4
+    discontinuity_weight: float = 1.0
+    discriminators: tuple[str, ...] = ("phase", "realism", "minibatch", "displacement")  # ablations drop some
+
+
+@dataclass
+class TrainedMogan:
+    config: MoganConfig
+    generator: Generator
+    classifier: PhaseClassifier
+    speech_mean: np.ndarray
+    speech_std: np.ndarray
+    pose_mean: np.ndarray
+    pose_std: np.ndarray
+    arm_columns: np.ndarray
+    classifier_f1: float
+    history: list[dict] = field(default_factory=list)
+
+
+def weighted_f1(true: np.ndarray, pred: np.ndarray, n_classes: int) -> float:
+    """Support-weighted mean of the per-class F1 scores (what the paper reports as the overall F-score)."""
+    total, score = 0, 0.0
+    for k in range(n_classes):
+        tp = np.sum((pred == k) & (true == k))
+        fp = np.sum((pred == k) & (true != k))
+        fn = np.sum((pred != k) & (true == k))
+        support = tp + fn
+        if support:
+            f1 = 2 * tp / max(2 * tp + fp + fn, 1)
+            score += f1 * support
+            total += support
+    return float(score / max(total, 1))
+
+
+def _sequences(arrays: Sequence[np.ndarray], length: int) -> tuple[np.ndarray, np.ndarray]:
+    """Consecutive non-overlapping windows, and for each whether it directly follows the previous one."""
+    out, follows = [], []
+    for a in arrays:
+        for k, s in enumerate(range(0, len(a) - length + 1, length)):
+            out.append(a[s:s + length])
+            follows.append(k > 0)
+    return np.stack(out), np.asarray(follows)
+
+
+def _classifier_input(pos: torch.Tensor, pitch: torch.Tensor, arm: torch.Tensor) -> torch.Tensor:
+    a = pos[..., arm]
+    vel = torch.diff(a, dim=1, prepend=a[:, :1])
+    return torch.cat([vel, pitch.unsqueeze(-1)], -1)
+
+
+def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases: Sequence[np.ndarray],
+                arm_columns: Sequence[int], config: MoganConfig, stages: MoganStages = MoganStages(), *,
+                seed: int = 0, val: tuple[Sequence[np.ndarray], Sequence[np.ndarray], Sequence[np.ndarray]] | None = None,
+                on_step: Callable[[dict], None] | None = None) -> TrainedMogan:
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    history: list[dict] = []
+    t0 = time.perf_counter()
+
+    def log(record: dict) -> None:
+        record["seconds"] = time.perf_counter() - t0
+        history.append(record)
+        if on_step is not None:
+            on_step(record)
+
+    allx, ally = np.concatenate(speech), np.concatenate(positions)
+    smean, sstd = allx.mean(0), np.maximum(allx.std(0), 1e-6)
+    pmean, pstd = ally.mean(0), np.maximum(ally.std(0), 1e-6)
+    xs, fol = _sequences([((s - smean) / sstd).astype(np.float32) for s in speech], config.sequence)
+    ys, _ = _sequences([((p - pmean) / pstd).astype(np.float32) for p in positions], config.sequence)
+    ls, _ = _sequences([np.asarray(p, np.int64) for p in phases], config.sequence)
+    X, Y, L = torch.from_numpy(xs), torch.from_numpy(ys), torch.from_numpy(ls)
+    F = torch.from_numpy(fol)
+    arm = torch.as_tensor(np.asarray(arm_columns, np.int64))
+    n = len(X)
+    bce = nn.BCEWithLogitsLoss()
+
+    def batches(size: int):
+        # runs of consecutive windows, so that the discontinuity penalty sees neighbours
+        start = int(rng.integers(0, max(n - size, 0) + 1))
+        return torch.arange(start, min(start + size, n))
+
+    # (1) phase classifier on real motion
+    clf = PhaseClassifier(config)
+    opt = torch.optim.Adam(clf.parameters(), lr=stages.learning_rate)
+    for epoch in range(stages.classifier_epochs):
+        clf.train()
+        for idx in torch.from_numpy(rng.permutation(n)).split(stages.batch_size):
+            logits = clf(_classifier_input(Y[idx], X[idx, :, -1], arm))
+            loss = nn.functional.cross_entropy(logits.reshape(-1, config.n_phases), L[idx].reshape(-1))
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        log({"stage": "phase classifier", "epoch": epoch + 1, "loss": loss.item()})
+    clf.eval()
+    for p in clf.parameters():
+        p.requires_grad_(False)
+    f1 = float("nan")
+    if val is not None:
+        vx, _ = _sequences([((s - smean) / sstd).astype(np.float32) for s in val[0]], config.sequence)
+        vy, _ = _sequences([((p - pmean) / pstd).astype(np.float32) for p in val[1]], config.sequence)
+        vl, _ = _sequences([np.asarray(p, np.int64) for p in val[2]], config.sequence)
+        with torch.no_grad():
+            pred = clf(_classifier_input(torch.from_numpy(vy), torch.from_numpy(vx)[..., -1], arm)).argmax(-1)
+        f1 = weighted_f1(vl.reshape(-1), pred.numpy().reshape(-1), config.n_phases)
+        log({"stage": "phase classifier", "val_weighted_f1": f1})
+
+    def noise(b: int, t: int) -> torch.Tensor:
+        return torch.randn(b, t, config.noise_dim)
+
+    # (2) generator pre-training with MSE, keeping its history
+    gen = Generator(config)
+    gen.set_phase("pretrain")
+    opt = torch.optim.Adam(gen.parameters(), lr=stages.learning_rate)
+    snapshots = [copy.deepcopy(gen.state_dict())]
+    every = max(1, stages.pretrain_epochs // stages.snapshots)
+    for epoch in range(stages.pretrain_epochs):
+        gen.train()
+        for idx in torch.from_numpy(rng.permutation(n)).split(stages.batch_size):
+            loss = nn.functional.mse_loss(gen(X[idx], noise(len(idx), config.sequence)), Y[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        if (epoch + 1) % every == 0:
+            snapshots.append(copy.deepcopy(gen.state_dict()))
+        log({"stage": "generator MSE pre-training", "epoch": epoch + 1, "loss": loss.item()})
+    if "mse_only" in stages.discriminators or not stages.discriminators:
+        gen.eval()
+        return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history)
+
+    width = config.discriminator_width
+    discs: dict[str, nn.Module] = {
+        "phase": SequenceDiscriminator(config.n_phases + 1, width),
+        "realism": SequenceDiscriminator(config.pose_dim + config.speech_dim, width),
+        "minibatch": MinibatchDiscriminator(config),
+        "displacement": SequenceDiscriminator(config.arm_dim, width),
+    }
+    active = [k for k in WEIGHTS if k in stages.discriminators]
+
+    def disc_input(name: str, pos: torch.Tensor, sp: torch.Tensor) -> torch.Tensor:
+        if name == "phase":
+            probs = torch.softmax(clf(_classifier_input(pos, sp[..., -1], arm)), -1)
+            return torch.cat([probs, sp[..., -1:]], -1)
+        if name == "realism":
+            return torch.cat([pos, sp], -1)
+        if name == "minibatch":
+            return pos
+        a = pos[..., arm]
+        return torch.diff(a, dim=1, prepend=a[:, :1])
+
+    def d_step(name: str, d_opt: torch.optim.Optimizer, fake_pos: torch.Tensor, idx: torch.Tensor) -> float:
+        d = discs[name]
+        real = d(disc_input(name, Y[idx], X[idx]))
+        fake = d(disc_input(name, fake_pos.detach(), X[idx]))
+        loss = bce(real, torch.ones_like(real)) + bce(fake, torch.zeros_like(fake))
+        d_opt.zero_grad()
+        loss.backward()
+        d_opt.step()
+        return float(((real > 0).float().mean() + (fake < 0).float().mean()) / 2)
+
+    d_opts = {k: torch.optim.RMSprop(discs[k].parameters(), lr=stages.adversarial_learning_rate) for k in active}
+    # (3) phase discriminator against the generator's pre-training history
+    if "phase" in active:
+        shadow = Generator(config)
+        for snap in snapshots[1:]:
+            shadow.load_state_dict(snap)
+            shadow.eval()
+            streak, tries = 0, 0
+            while streak < 3 and tries < 200:
+                idx = batches(stages.batch_size)
+                with torch.no_grad():
+                    fake = shadow(X[idx], noise(len(idx), config.sequence))
+                acc = d_step("phase", d_opts["phase"], fake, idx)
+                streak = streak + 1 if acc >= 0.7 else 0
+                tries += 1
+            log({"stage": "phase discriminator pre-training", "snapshot": len(history), "accuracy": acc})
+    # (4) motion-realism discriminator against a fresh generator
+    if "realism" in active:
+        fresh = Generator(config)
+        f_opt = torch.optim.RMSprop(fresh.parameters(), lr=stages.adversarial_learning_rate)
+        for _ in range(stages.realism_pretrain_steps):
+            idx = batches(stages.batch_size)
+            fake = fresh(X[idx], noise(len(idx), config.sequence))
+            d_step("realism", d_opts["realism"], fake, idx)
+            out = discs["realism"](disc_input("realism", fake, X[idx]))
+            g_loss = bce(out, torch.ones_like(out))
+            f_opt.zero_grad()
+            g_loss.backward()
+            f_opt.step()
+        log({"stage": "realism discriminator pre-training", "steps": stages.realism_pretrain_steps})
+    # (5) adversarial training
+    gen.set_phase("adversarial")
+    g_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
+    mse_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
+    total_w = sum(WEIGHTS[k] for k in active)
+    for step in range(stages.adversarial_steps):
+        gen.train()
+        idx = batches(stages.batch_size)
+        fake = gen(X[idx], noise(len(idx), config.sequence))
+        accs = {k: d_step(k, d_opts[k], fake, idx) for k in active}
+        g_loss = sum(WEIGHTS[k] * bce(o := discs[k](disc_input(k, fake, X[idx])), torch.ones_like(o))
+                     for k in active) / total_w
+        g_opt.zero_grad()
+        g_loss.backward()
+        g_opt.step()
+        if step % 2 == 1:  # one MSE correction per two adversarial steps, with the discontinuity penalty
+            out = gen(X[idx], noise(len(idx), config.sequence))
+            mse = nn.functional.mse_loss(out, Y[idx])
+            follows = F[idx][1:]
+            if follows.any():
+                jump = (out[1:, 0] - out[:-1, -1]).pow(2).mean(-1)
+                mse = mse + stages.discontinuity_weight * (jump * follows).sum() / follows.sum()
+            mse_opt.zero_grad()
+            mse.backward()
+            mse_opt.step()
+        if step % 50 == 0 or step == stages.adversarial_steps - 1:
+            log({"stage": "adversarial", "step": step + 1, "generator_loss": g_loss.item(),
+                 **{f"d_{k}_accuracy": v for k, v in accs.items()}})
+    gen.eval()
+    return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history)
+
+
+@torch.no_grad()
+def generate_mogan(model: TrainedMogan, speech: np.ndarray, seed: int = 0) -> np.ndarray:
+    """(T, 27) speech -> (T, pose_dim) positions; the GRU runs over the whole segment (continuous output)."""
+    gen = torch.Generator().manual_seed(seed)
+    x = torch.from_numpy(((speech - model.speech_mean) / model.speech_std).astype(np.float32))[None]
+    z = torch.randn(1, len(speech), model.config.noise_dim, generator=gen)
+    out = model.generator(x, z)[0].numpy()
+    return out.astype(np.float64) * model.pose_std + model.pose_mean
