@@ -87,7 +87,7 @@ def main():
     import evalsuite
     from evalsuite.metrics.kinematics import derivative_norms
     from evalsuite.metrics.histograms import joint_histograms
-    from evalsuite.metrics.scoring import score_folders
+    from evalsuite.metrics.engine import score_folders
 
     cache = generate(args.cache)
     conds = [str(cache / f"cond{c:02d}") for c in range(N_CONDITIONS)]
@@ -105,7 +105,7 @@ def main():
         wall = time.perf_counter() - t0
         print(f"score {label}, jobs={jobs}: {wall:.1f} s wall for {n_files} files "
               f"({N_CONDITIONS} conditions + natural x {N_SEQUENCES} x {SECONDS:g} s, {N_JOINTS} joints, "
-              f"{FPS:g} fps); {len(result['summary'])} summary rows; load average now "
+              f"{FPS:g} fps); {len(result.summary)} summary rows; load average now "
               + ", ".join(f"{x:.2f}" for x in os.getloadavg()))
 
     # Peer in the same run: metric computation only, on the same positions, vectorised vs reference loops.

@@ -19,7 +19,7 @@ COMMANDS = {
     "info": "evalsuite.motion.cli:info",
     "convert": "evalsuite.motion.cli:convert",
     "demo": "evalsuite.demo:demo",
-    "score": "evalsuite.metrics.cli:score",
+    "score": "evalsuite.score_command:score",
     "fgd": "evalsuite.learned.cli:fgd",
     "render": "renderers.cli:render",
     "study": "study_app.cli:study",

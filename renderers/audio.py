@@ -11,6 +11,8 @@ import warnings
 import numpy as np
 from scipy.io import wavfile
 
+from evalsuite.audio import read_wav
+from evalsuite.audio import write_wav as _write_wav
 from evalsuite.errors import InputError
 
 
@@ -24,25 +26,9 @@ def read_audio(path) -> tuple[np.ndarray, int]:
     if not path.is_file():
         raise InputError("no such audio file", path=path)
     if path.suffix.lower() == ".wav":
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", wavfile.WavFileWarning)
-                rate, data = wavfile.read(path)
-        except (ValueError, EOFError) as exc:
-            raise InputError(f"not a readable WAV file ({exc})", path=path) from None
-        return _to_float(data), int(rate)
+        samples, rate = read_wav(path)
+        return samples.astype(np.float32), rate
     return decode_audio(path)
-
-
-def _to_float(data: np.ndarray) -> np.ndarray:
-    data = np.asarray(data)
-    if data.ndim == 1:
-        data = data[:, None]
-    if data.dtype.kind == "f":
-        return data.astype(np.float32)
-    if data.dtype == np.uint8:
-        return ((data.astype(np.float32) - 128.0) / 128.0)
-    return (data.astype(np.float32) / float(np.iinfo(data.dtype).max + 1))
 
 
 def decode_audio(path, sample_rate: int | None = None, channels: int | None = None) -> tuple[np.ndarray, int]:
@@ -63,16 +49,15 @@ def decode_audio(path, sample_rate: int | None = None, channels: int | None = No
 
 
 def _probe_audio_rate(path) -> int | None:
-    from renderers.video import probe
+    from renderers.media_probe import probe
 
     info = probe(path)
     return info.get("audio_rate")
 
 
 def write_wav(path, samples: np.ndarray, rate: int) -> None:
-    """Write 16-bit PCM WAV."""
-    data = np.clip(np.asarray(samples, dtype=np.float32), -1.0, 1.0)
-    wavfile.write(path, int(rate), (data * 32767.0).astype(np.int16))
+    """Write 16-bit PCM WAV (:func:`evalsuite.audio.write_wav`)."""
+    _write_wav(path, np.clip(np.asarray(samples, dtype=np.float64), -1.0, 1.0), rate)
 
 
 def fit_length(samples: np.ndarray, n_samples: int) -> np.ndarray:

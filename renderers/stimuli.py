@@ -29,12 +29,10 @@ matches).
 """
 from __future__ import annotations
 
-import concurrent.futures as cf
 import csv
 import hashlib
 import hmac
 import json
-import multiprocessing
 import os
 import pathlib
 import re
@@ -46,6 +44,7 @@ from tqdm import tqdm
 
 from evalsuite.errors import InputError
 from evalsuite.hashing import file_sha256
+from evalsuite.parallel import run
 from renderers.attention import CHECKS, DEFAULT_TEXT
 
 # Part of every input hash: bump it when a change to the renderer changes how videos look.
@@ -304,35 +303,8 @@ def write_manifest(path, rows: list[dict]) -> None:
     os.replace(tmp, path)
 
 
-def _execute(specs, jobs: int, dask_address: str | None, desc: str):
-    """Run specs; yields (spec, info) as they finish, with a progress bar."""
-    if not specs:
-        return
-    bar = tqdm(total=len(specs), desc=desc, unit="video")
-    try:
-        if dask_address:
-            try:
-                from distributed import Client, as_completed
-            except ImportError:
-                raise InputError("--dask needs dask.distributed: pip install 'evalsuite[dask]'") from None
-            with Client(dask_address) as client:
-                futures = {client.submit(run_job, s, pure=False): s for s in specs}
-                for fut in as_completed(futures):
-                    yield futures[fut], fut.result()
-                    bar.update()
-        elif jobs > 1:
-            ctx = multiprocessing.get_context("spawn")   # each worker opens its own GL context
-            with cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-                futures = {pool.submit(run_job, s): s for s in specs}
-                for fut in cf.as_completed(futures):
-                    yield futures[fut], fut.result()
-                    bar.update()
-        else:
-            for s in specs:
-                yield s, run_job(s)
-                bar.update()
-    finally:
-        bar.close()
+def _describe_spec(spec: dict) -> str:
+    return f"video {spec['file']}"
 
 
 def build_stimuli(config, *, jobs: int = 1, dask_address: str | None = None, force: bool = False,
@@ -356,13 +328,19 @@ def build_stimuli(config, *, jobs: int = 1, dask_address: str | None = None, for
                 todo.append(s)
         if len(todo) < len(specs):
             echo(f"  {phase}: {len(specs) - len(todo)} of {len(specs)} videos are up to date")
-        for spec, info in _execute(todo, jobs, dask_address, phase):
+
+        def done(i: int, info: dict, todo: list = todo) -> None:
+            nonlocal rendered
             for msg in info.pop("warnings", []):
                 tqdm.write(f"Warning: {msg}")
-            rows[spec["file"]] = _row(spec, info)
+            rows[todo[i]["file"]] = _row(todo[i], info)
             rendered += 1
             # Written after every video, so an interrupted run resumes where it stopped.
             write_manifest(manifest, [rows[s["file"]] for s in render_jobs + attention_jobs if s["file"] in rows])
+
+        # local worker processes are spawned: each opens its own GL context
+        run(run_job, todo, jobs=jobs, dask_address=dask_address, desc=phase, unit="video", consume=done,
+            describe=_describe_spec)
     ordered = [rows[s["file"]] for s in render_jobs + attention_jobs]
     write_manifest(manifest, ordered)
     return {"manifest": manifest, "rendered": rendered, "skipped": skipped, "rows": ordered}

@@ -11,7 +11,8 @@ Distribution distances (:mod:`~evalsuite.metrics.distribution`): :func:`fd_g`, :
 CCA (:mod:`~evalsuite.metrics.cca`): :func:`cca_fit`, :func:`cca_score`, :func:`canonical_correlation`.
 Beat alignment (:mod:`~evalsuite.metrics.beats`): :func:`audio_onsets`, :func:`motion_beats`,
 :func:`beat_alignment`. Conventions: :data:`CONVENTIONS`. Whole folders:
-:func:`~evalsuite.metrics.scoring.score_folders` (what ``evalsuite score`` runs).
+:func:`~evalsuite.metrics.engine.score_folders` (what ``evalsuite score`` runs) over the metric families
+registered in :mod:`evalsuite.metrics.families` (add one with :func:`register_family`).
 
 Positions are world positions ``(T, J, 3)`` in file units (``Motion.positions()``).
 """
@@ -20,6 +21,7 @@ from evalsuite.metrics.beats import (audio_onsets, beat_alignment, beat_alignmen
 from evalsuite.metrics.cca import CCAModel, canonical_correlation, cca_fit, cca_score
 from evalsuite.metrics.conventions import CONVENTIONS, Convention, get_convention
 from evalsuite.metrics.distribution import div_k, fd_g, fd_k, l1div
+from evalsuite.metrics.families import MetricFamily, MetricInfo, register_family
 from evalsuite.metrics.frechet import (FrechetWarning, frechet_distance, frechet_distance_details,
                                        frechet_distance_samples, gaussian_stats)
 from evalsuite.metrics.histograms import clipped_fraction, hellinger_distance, joint_histograms
@@ -38,4 +40,5 @@ __all__ = [
     "across_sequences", "average_acceleration", "average_jerk", "average_speed", "derivative_norms",
     "sequence_means",
     "LengthMismatchWarning", "align_lengths", "average_position_error", "mean_absolute_error",
+    "MetricFamily", "MetricInfo", "register_family",
 ]

@@ -37,27 +37,11 @@ __all__ = ["read_wav", "onset_strength", "audio_onsets", "motion_beats", "beat_a
 
 
 def read_wav(path) -> tuple[np.ndarray, int]:
-    """Mono float signal in [-1, 1] and its sample rate, via ``scipy.io.wavfile``."""
-    from scipy.io import wavfile
+    """Mono float signal in [-1, 1) and its sample rate (:func:`evalsuite.audio.read_wav`, channels averaged)."""
+    from evalsuite.audio import read_wav as read, to_mono
 
-    path = pathlib.Path(path)
-    try:
-        sr, data = wavfile.read(path)
-    except (ValueError, OSError, EOFError) as exc:
-        raise InputError(f"not a readable WAV file ({exc})", path=path) from None
-    data = np.asarray(data)
-    if data.dtype.kind == "i":
-        data = data.astype(np.float64) / float(np.iinfo(data.dtype).max)
-    elif data.dtype.kind == "u":
-        info = np.iinfo(data.dtype)
-        data = (data.astype(np.float64) - (info.max + 1) / 2) / ((info.max + 1) / 2)
-    else:
-        data = data.astype(np.float64)
-    if data.ndim == 2:
-        data = data.mean(axis=1)
-    if data.size == 0:
-        raise InputError("the WAV file has no samples", path=path)
-    return data, int(sr)
+    samples, rate = read(path)
+    return to_mono(samples), rate
 
 
 def onset_strength(signal, sr: float, frame_s: float = 0.046, hop_s: float = 0.01,

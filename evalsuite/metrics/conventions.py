@@ -57,6 +57,12 @@ class Convention:
     std_ddof: int = 1
     cca_in_sample: bool = False
 
+    def rate(self, fps: float) -> float | None:
+        """The rate that scales frame differences (``fps ** order``), or None for per-frame units."""
+        if self.time_scale == "frame":
+            return None
+        return float(fps) if self.time_scale == "data" else float(self.time_scale)
+
     def scale(self, fps: float, order: int) -> float:
         """Factor turning an ``order``-th frame difference into the convention's unit."""
         if self.time_scale == "frame":

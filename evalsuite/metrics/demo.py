@@ -55,7 +55,7 @@ def build_conditions(out_dir: pathlib.Path, seed: int = 0) -> dict[str, pathlib.
 def run(out_dir: pathlib.Path, echo) -> None:
     from evalsuite.metrics.figures import write_figures
     from evalsuite.metrics.report import format_table, summary_frame, write_outputs
-    from evalsuite.metrics.scoring import score_folders
+    from evalsuite.metrics.engine import score_folders
 
     folders = build_conditions(out_dir)
     echo(f"  conditions written to {out_dir / 'conditions'}: {', '.join(folders)} "
@@ -66,7 +66,7 @@ def run(out_dir: pathlib.Path, echo) -> None:
     score_dir = out_dir / "score"
     write_outputs(result, score_dir)
     write_figures(result, score_dir / "figures")
-    for issue in result["issues"]:
+    for issue in result.issues:
         echo(f"  note: {issue}")
-    echo(format_table(summary_frame(result["summary"])))
+    echo(format_table(summary_frame(result.summary)))
     echo(f"  tables, JSON and figures written to {score_dir}")

@@ -36,10 +36,10 @@ def _save(fig, base: pathlib.Path) -> list[pathlib.Path]:
 def histogram_figures(result: dict, out_dir) -> list[pathlib.Path]:
     plt = _plt()
     out = pathlib.Path(out_dir)
-    setup, conv, plan = result["setup"], result["convention"], result["plan"]
+    setup, conv, plan = result.setup, result.convention, result.plan
     paths = []
     by_key: dict = {}
-    for h in result["histograms"]:
+    for h in result.histograms:
         by_key.setdefault((h["quantity"], h["group"]), []).append(h)
     for (q, group), hists in by_key.items():
         edges = setup.edges[q]
@@ -67,9 +67,9 @@ def histogram_figures(result: dict, out_dir) -> list[pathlib.Path]:
 
 def wrist_distribution_figure(result: dict, out_dir) -> list[pathlib.Path]:
     plt = _plt()
-    plan = result["plan"]
-    tracks = {c: np.concatenate([t.reshape(-1, 3) for t, _ in ts]) for c, ts in result["wrist_tracks"].items() if ts}
-    first = {c: ts[0] for c, ts in result["wrist_tracks"].items() if ts}
+    plan = result.plan
+    tracks = {c: np.concatenate([t.reshape(-1, 3) for t, _ in ts]) for c, ts in result.wrist_tracks.items() if ts}
+    first = {c: ts[0] for c, ts in result.wrist_tracks.items() if ts}
     if plan.reference not in tracks:
         return []
     ref = tracks[plan.reference]

@@ -13,6 +13,8 @@ import platform
 import numpy as np
 import pandas as pd
 
+from evalsuite.metrics.engine import ScoreResult
+
 __all__ = ["SUMMARY_COLUMNS", "summary_frame", "format_table", "markdown_table", "latex_table", "write_outputs"]
 
 SUMMARY_COLUMNS = ["condition", "metric", "value", "unit", "ci_low", "ci_high", "std", "n", "better", "convention"]
@@ -118,13 +120,13 @@ def _jsonable(x):
     return x
 
 
-def provenance(result: dict) -> dict:
+def provenance(result: ScoreResult) -> dict:
     """What a run depended on: versions, convention, joints, fps, bins, every input file's SHA-256."""
     import scipy
 
     from evalsuite import __version__
 
-    plan, setup, conv = result["plan"], result["setup"], result["convention"]
+    plan, setup, conv = result.plan, result.setup, result.convention
     return {
         "evalsuite_version": __version__,
         "python": platform.python_version(),
@@ -138,33 +140,34 @@ def provenance(result: dict) -> dict:
         "folders": {k: str(v) for k, v in plan.folders.items()},
         "joints": setup.joints,
         "joint_groups": setup.groups,
-        "fps": result["fps"],
+        "fps": result.fps,
         "resampled_to": setup.resample,
+        "resampled_files": result.resampled,
         "metrics": setup.metrics,
         "histogram_edges": {q: e for q, e in setup.edges.items()},
         "beat_sigma_s": setup.sigma,
-        "bootstrap": {"resamples": result["bootstrap"], "seed": result["seed"], "unit": "sequences",
+        "bootstrap": {"resamples": result.bootstrap, "seed": result.seed, "unit": "sequences",
                       "interval": "percentile 2.5-97.5"},
-        "files": result["files"],
+        "files": result.files,
     }
 
 
-def write_outputs(result: dict, out_dir) -> dict:
+def write_outputs(result: ScoreResult, out_dir) -> dict:
     """Write every table and the JSON under ``out_dir``; returns ``{kind: path}``."""
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    frame = summary_frame(result["summary"])
+    frame = summary_frame(result.summary)
     paths = {"summary_csv": out / "summary.csv", "per_sequence_csv": out / "per_sequence.csv",
              "per_joint_csv": out / "per_joint.csv", "histograms_csv": out / "histograms.csv",
              "json": out / "results.json", "markdown": out / "summary.md", "latex": out / "summary.tex"}
     frame.to_csv(paths["summary_csv"], index=False)
-    pd.DataFrame(result["per_sequence"], columns=["condition", "sequence", "metric", "value", "unit"]).to_csv(
+    pd.DataFrame(result.per_sequence, columns=["condition", "sequence", "metric", "value", "unit"]).to_csv(
         paths["per_sequence_csv"], index=False)
-    pd.DataFrame(result["per_joint"], columns=["condition", "joint", "metric", "value", "unit"]).to_csv(
+    pd.DataFrame(result.per_joint, columns=["condition", "joint", "metric", "value", "unit"]).to_csv(
         paths["per_joint_csv"], index=False)
     hist_rows = []
-    edges = result["setup"].edges
-    for h in result["histograms"]:
+    edges = result.setup.edges
+    for h in result.histograms:
         e = edges[h["quantity"]]
         lows = list(e[:-1]) + [e[-1]]
         highs = list(e[1:]) + [float("inf")]
@@ -174,7 +177,7 @@ def write_outputs(result: dict, out_dir) -> dict:
     pd.DataFrame(hist_rows, columns=["condition", "quantity", "group", "bin_low", "bin_high", "count"]).to_csv(
         paths["histograms_csv"], index=False)
     payload = {"provenance": provenance(result), "summary": frame.to_dict("records"),
-               "issues": result["issues"]}
+               "issues": result.issues}
     paths["json"].write_text(json.dumps(_jsonable(payload), indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
     paths["markdown"].write_text(markdown_table(frame), encoding="utf-8")
     paths["latex"].write_text(latex_table(frame), encoding="utf-8")

@@ -25,7 +25,7 @@ MOTION_SUFFIXES = (".bvh",) + POSITION_SUFFIXES
 
 def load_motion(path, *, fps: float | None = None, joint_names=None, parents=None,
                 convention: str | None = None, root_offset: str | None = None,
-                joint_translation: str | None = None) -> Motion:
+                joint_translation: str | None = None, fallback_fps: float | None = None) -> Motion:
     """Load a motion file (``.bvh``, ``.npy``, ``.npz``, ``.csv``).
 
     Args:
@@ -43,6 +43,8 @@ def load_motion(path, *, fps: float | None = None, joint_names=None, parents=Non
     """
     path = pathlib.Path(path)
     suffix = path.suffix.lower()
+    if fallback_fps is not None and fps is None and suffix in (".npy", ".csv"):
+        fps = fallback_fps
     if suffix not in MOTION_SUFFIXES:
         raise InputError(f"unknown motion file type {path.suffix!r}; expected one of {', '.join(MOTION_SUFFIXES)}",
                          path=path)
@@ -65,7 +67,7 @@ def load_motion(path, *, fps: float | None = None, joint_names=None, parents=Non
                              "use evalsuite.motion.ops.resample to change the frame rate", path=path)
         return Motion(skeleton, values, file_fps, name=path.stem, source=os.fspath(path), **conv)
     if suffix == ".npz":
-        return _load_npz(path, fps, joint_names, parents)
+        return _load_npz(path, fps, joint_names, parents, fallback_fps)
     if suffix == ".npy":
         try:
             arr = np.load(path, allow_pickle=False)
@@ -102,7 +104,7 @@ def _positions_motion(path, arr, fps, joint_names, parents):
         raise InputError(exc.reason, path=path) from None
 
 
-def _load_npz(path, fps, joint_names, parents):
+def _load_npz(path, fps, joint_names, parents, fallback_fps=None):
     try:
         with np.load(path, allow_pickle=False) as data:
             contents = {k: data[k] for k in data.files}
@@ -115,6 +117,8 @@ def _load_npz(path, fps, joint_names, parents):
         joint_names = [str(n) for n in contents["joint_names"]]
     if fps is None and "fps" in contents:
         fps = float(contents["fps"])
+    if fps is None:
+        fps = fallback_fps
     if parents is None and "parents" in contents:
         parents = contents["parents"]
     return _positions_motion(path, contents[key], fps, joint_names, parents)
@@ -153,6 +157,60 @@ def _load_csv(path, fps, joint_names, parents):
     if fps is None and time is not None and len(time) > 1:
         fps = _clean_fps(float(np.median(np.diff(time))))
     return _positions_motion(path, frame.to_numpy(dtype=np.float64), fps, joint_names or names, parents)
+
+
+def list_motion_files(folder, *, what: str | None = None) -> dict[str, pathlib.Path]:
+    """The motion files directly in ``folder``, keyed by file stem, in name order.
+
+    ``what`` names the folder's owner in error messages (e.g. ``"condition 'SysA'"``). InputError if the
+    folder is missing, is a file, holds no motion file, or holds two files of one stem (``a.bvh``, ``a.npy``).
+    """
+    folder = pathlib.Path(folder)
+    if not folder.exists():
+        raise InputError(f"folder of {what} does not exist" if what else "no such folder", path=folder)
+    if not folder.is_dir():
+        raise InputError("expected a folder of motion files" + (f" for {what}" if what else ""), path=folder)
+    found: dict[str, pathlib.Path] = {}
+    for path in sorted(folder.iterdir()):
+        if path.is_file() and path.suffix.lower() in MOTION_SUFFIXES:
+            if path.stem in found:
+                raise InputError(f"two files for sequence {path.stem!r}: {found[path.stem].name} and "
+                                 f"{path.name}; keep one per sequence", path=folder)
+            found[path.stem] = path
+    if not found:
+        where = f"the folder of {what}" if what else "this folder"
+        raise InputError(f"no motion files ({', '.join(MOTION_SUFFIXES)}) in {where}", path=folder)
+    return found
+
+
+def positions_joint_count(path) -> int | None:
+    """Joints of a ``.npy`` positions array without loading it (memory-mapped header), None if unknown."""
+    arr = np.load(path, mmap_mode="r", allow_pickle=False)
+    if arr.ndim == 3:
+        return int(arr.shape[1])
+    return int(arr.shape[1] // 3) if arr.ndim == 2 else None
+
+
+def load_motion_folder(folder, *, convention: str | None = None, fps: float | None = None,
+                       joint_names=None) -> dict[str, Motion]:
+    """Every motion file of a folder (or one file), keyed by file stem, loaded under ``convention``.
+
+    ``fps`` and ``joint_names`` are used for positions files that do not store them (GENEA ``.npy``
+    files: ``(T, 3J)`` arrays without names); names whose count does not fit a file are not used there.
+    """
+    folder = pathlib.Path(folder)
+    paths = {folder.stem: folder} if folder.is_file() else list_motion_files(folder)
+    out: dict[str, Motion] = {}
+    for stem, path in paths.items():
+        suffix = path.suffix.lower()
+        if suffix == ".bvh":
+            out[stem] = load_motion(path, convention=convention)
+            continue
+        names = joint_names if suffix != ".npz" else None
+        if names is not None and suffix == ".npy" and positions_joint_count(path) != len(names):
+            names = None  # let the loader name them; the caller's joint check reports the mismatch
+        out[stem] = load_motion(path, fallback_fps=fps, joint_names=names)
+    return out
 
 
 def save_motion(motion: Motion, path, *, end_sites: bool = False, precision: int = 6) -> None:

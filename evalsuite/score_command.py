@@ -1,4 +1,9 @@
-"""``evalsuite score``: score condition folders against natural motion."""
+"""``evalsuite score``: score condition folders against natural motion.
+
+The command sits above both :mod:`evalsuite.metrics` (the engine and its metric families) and
+:mod:`evalsuite.learned` (the FGD family, added for a run with ``--fgd MODEL``), so neither package
+imports the other upwards.
+"""
 from __future__ import annotations
 
 import pathlib
@@ -8,32 +13,14 @@ import click
 from evalsuite.errors import InputError
 
 
-def _fgd_rows(result, model_path, fps, resample, bootstrap, seed, progress, raw):
-    """Rows from the learned FGD scorer (``evalsuite.learned.fgd.score_fgd``), imported only when asked."""
+def _fgd_family(model_path, raw: bool):
+    """The FGD metric family for this run (needs the learned extra: torch)."""
     try:
-        from evalsuite.learned.fgd import score_fgd
-    except ModuleNotFoundError as exc:
-        raise InputError(f"--fgd needs the learned extra (module {exc.name!r} is missing): "
-                         "pip install 'evalsuite[learned]'", field="fgd") from None
-    from evalsuite.metrics.scoring import _load
-
-    plan = result["plan"]
-    motions = {}
-    for cond in plan.conditions:
-        motions[cond] = {}
-        for s, info in result["files"][cond].items():
-            motions[cond][s] = _load(info["path"], fps, resample)
-    reference = motions.pop(plan.reference)
-    rows = score_fgd(model_path, reference, motions, raw=raw, n_bootstrap=bootstrap, seed=seed, progress=progress)
-    out = []
-    for r in rows:
-        r = dict(r)
-        for key in ("ci_low", "ci_high"):
-            r.setdefault(key, float("nan"))
-        r.setdefault("better", "lower")
-        r.setdefault("convention", result["convention"].name)
-        out.append(r)
-    return out
+        from evalsuite.learned.family import FGDFamily
+    except ImportError as exc:
+        raise InputError(f"--fgd needs the learned extra ({exc}): pip install 'evalsuite[learned]'",
+                         field="fgd") from None
+    return FGDFamily(model_path, raw=raw)
 
 
 @click.command()
@@ -83,33 +70,34 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
     per_joint.csv, histograms.csv, results.json (with provenance and file hashes),
     summary.md, summary.tex and figures/ (PNG and SVG).
 
-    Example: evalsuite score -r natural=data/NA data/SysA data/SysB -j genea2020_upper -o scores
+    Example: evalsuite score -r natural=data/NA data/SysA data/SysB --joints genea2020_upper -o scores
     """
+    from evalsuite.metrics.engine import score_folders
     from evalsuite.metrics.figures import write_figures
     from evalsuite.metrics.report import format_table, summary_frame, write_outputs
-    from evalsuite.metrics.scoring import score_folders
 
     group_list = [g.replace(";", ",") for g in groups.split(",") if g.strip()] if groups else []
+    extra = [_fgd_family(fgd_model, fgd_raw)] if fgd_model is not None else []
     result = score_folders(reference, conditions, joints=joints, metrics=list(metrics) or None,
                            convention=convention, audio_dir=audio_dir, fps=fps, resample=resample,
                            speed_bins=speed_bins, acceleration_bins=acceleration_bins, groups=group_list,
                            sigma=sigma, bootstrap=bootstrap, seed=seed, jobs=jobs, dask_address=dask_address,
-                           strict=strict, progress=not quiet, figures=not no_figures)
-    if fgd_model is not None:
-        result["summary"].extend(_fgd_rows(result, fgd_model, fps, resample, bootstrap, seed, not quiet, fgd_raw))
+                           strict=strict, progress=not quiet, figures=not no_figures, extra_families=extra)
     paths = write_outputs(result, out_dir)
     figures = [] if no_figures else write_figures(result, out_dir / "figures")
-    for issue in result["issues"]:
+    for issue in result.issues:
         click.secho(f"warning: {issue}", fg="yellow", err=True)
+    for note in result.resampled:
+        click.secho(f"note: resampled {note}", fg="yellow", err=True)
     if not quiet:
-        click.echo(format_table(summary_frame(result["summary"])))
+        click.echo(format_table(summary_frame(result.summary)))
         click.echo(f"\nWrote {paths['summary_csv']} (and per_sequence.csv, per_joint.csv, histograms.csv, "
                    f"results.json, summary.md, summary.tex){'' if no_figures else f', {len(figures)} figure files'}"
                    f" to {out_dir}")
     # The other conditions' results are written above; a condition with nothing scored is still a
     # failure the caller (often a script) must notice.
-    scored = {row["condition"] for row in result["summary"]}
-    unscored = [c for c in result["plan"].conditions if c not in scored]
+    scored = {row["condition"] for row in result.summary}
+    unscored = [c for c in result.plan.conditions if c not in scored]
     if unscored:
         raise click.ClickException(f"nothing could be scored for condition(s) {', '.join(unscored)} (see the "
                                    f"warnings above); the other results are in {out_dir}")

@@ -1,0 +1,88 @@
+"""FGD as a metric family of ``evalsuite score`` (``--fgd MODEL``), built on :mod:`evalsuite.learned.fgd`.
+
+Per sequence (in the workers) the motion is cut into the model's windows and encoded; per condition the
+Gaussians of the natural and the condition's features give FGD, with the percentile bootstrap over
+sequences of :func:`~evalsuite.learned.fgd.bootstrap_fd`, and optionally the raw-space distance. This
+module sits above :mod:`evalsuite.metrics` (it imports it, never the reverse); the ``score`` command adds
+the family for a run when a model is given.
+"""
+from __future__ import annotations
+
+import math
+import pathlib
+import warnings
+
+import numpy as np
+
+from evalsuite.errors import InputError
+from evalsuite.learned.fgd import FEATURE_UNIT, RAW_UNIT, RawReference, bootstrap_fd
+from evalsuite.learned.modelfile import FeatureModel, load_model
+from evalsuite.metrics.families import MetricFamily, MetricInfo, ReduceContext, SequenceContext
+from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian_stats
+
+__all__ = ["FGDFamily"]
+
+_MODELS: dict[tuple[str, float], FeatureModel] = {}   # per process: a worker loads each model once
+
+
+def _model(path: str) -> FeatureModel:
+    key = (path, pathlib.Path(path).stat().st_mtime)
+    if key not in _MODELS:
+        _MODELS[key] = load_model(path)
+    return _MODELS[key]
+
+
+class FGDFamily(MetricFamily):
+    """FGD (and, with ``raw=True``, the raw-space distance) against the natural motion, for one model."""
+
+    name = "fgd"
+
+    def __init__(self, model_path: str | pathlib.Path, raw: bool = False):
+        self.model_path = str(model_path)
+        self.raw = raw
+        load_model(self.model_path)  # fail early, in the parent, on a missing or corrupt model
+        self.metrics = (MetricInfo("fgd", FEATURE_UNIT, "lower", description="Fréchet gesture distance"),) + (
+            (MetricInfo("fgd_raw", RAW_UNIT, "lower", description="Fréchet distance of raw windows"),)
+            if raw else ())
+
+    def measure(self, ctx: SequenceContext) -> None:
+        model = _model(self.model_path)
+        try:
+            windows = model.windows(ctx.motion)
+        except InputError as exc:
+            ctx.record["fgd_error"] = exc.reason
+            return
+        ctx.record["fgd_features"] = model.encode(windows)
+        if self.raw:
+            ctx.record["fgd_raw_windows"] = model.normalize(windows).reshape(len(windows), -1)
+
+    def reduce(self, ctx: ReduceContext) -> None:
+        if ctx.cond == ctx.reference:
+            return
+        sides = []
+        for label, recs in (("reference", ctx.ref), (ctx.cond, ctx.recs)):
+            bad = [f"{label}/{s}: {r['fgd_error']}" for s, r in sorted(recs.items()) if "fgd_error" in r]
+            if bad:
+                raise InputError("FGD: " + "; ".join(bad[:3]), field="fgd")
+            sides.append([recs[s] for s in sorted(recs)])
+        ref_feats = [r["fgd_features"] for r in sides[0]]
+        cond_feats = [r["fgd_features"] for r in sides[1]]
+        n_ref, n_cond = sum(len(f) for f in ref_feats), sum(len(f) for f in cond_feats)
+        for label, n in (("the reference", n_ref), (ctx.cond, n_cond)):
+            if n < 2:
+                raise InputError(f"FGD: {label} gives {n} window(s); need at least 2 for a covariance", field="fgd")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FrechetWarning)
+            value = frechet_distance(*gaussian_stats(np.concatenate(ref_feats)),
+                                     *gaussian_stats(np.concatenate(cond_feats)))
+        ci = bootstrap_fd(ref_feats, cond_feats, n_bootstrap=ctx.n_bootstrap, seed=ctx.seed)
+        model = _model(self.model_path)
+        extra = {"model_hash": model.content_hash, "window": int(model.window),
+                 "n_windows_reference": int(n_ref), "n_windows_condition": int(n_cond)}
+        ctx.add("fgd", value, ci=ci, n=len(cond_feats))
+        ctx.summary[-1].update(extra)
+        if self.raw:
+            raw = RawReference(np.concatenate([r["fgd_raw_windows"] for r in sides[0]]))
+            ctx.add("fgd_raw", raw.distance(np.concatenate([r["fgd_raw_windows"] for r in sides[1]]))["value"],
+                    ci=(math.nan, math.nan), n=len(cond_feats))
+            ctx.summary[-1].update(extra)

@@ -1,0 +1,318 @@
+"""The scoring engine behind ``evalsuite score``: plan -> run -> reduce over the registered metric families.
+
+1. **Plan** (:mod:`evalsuite.metrics.planning`): pair the files of the natural folder and of each condition
+   folder by name, resolve joints, groups and metrics.
+2. **Run**: one task per sequence name (the natural file and every condition's file of that name), so the
+   natural motion is loaded once per name. :func:`score_sequence` runs in the parent, in local processes or
+   on a dask cluster (:func:`evalsuite.parallel.run`); it loads each file and lets every family measure it
+   (:meth:`MetricFamily.measure`), returning plain numpy summaries, never the raw motion. A file that fails
+   is reported in its record and the others go on.
+3. **Reduce**: results arrive in task order whatever order they finish in; the families fold bulky
+   summaries into running sums as they come (:meth:`MetricFamily.fold`) and then turn each condition's
+   records into rows (:meth:`MetricFamily.reduce`) in a fixed order (conditions as given, sequences sorted),
+   so the numbers are identical however the per-file work was run.
+"""
+from __future__ import annotations
+
+import pathlib
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from evalsuite.errors import InputError
+from evalsuite.hashing import file_sha256
+from evalsuite.metrics.beats import audio_onsets
+from evalsuite.metrics.conventions import Convention, get_convention, reference_edges
+from evalsuite.metrics.families import (
+    MetricFamily, ReduceContext, SequenceContext, bootstrap_weights, metric_index, registered_families)
+from evalsuite.metrics.histograms import automatic_edges
+from evalsuite.metrics.planning import DEFAULT_GROUPS, Plan, plan_scoring, resolve_groups, resolve_metrics
+from evalsuite.metrics.tracks import wrist_track
+from evalsuite.motion.io import load_motion
+from evalsuite.parallel import run
+
+__all__ = ["ScoreSetup", "ScoreResult", "score_sequence", "probe_ranges", "score_folders", "reduce_results"]
+
+
+@dataclass
+class ScoreSetup:
+    """Everything a worker needs besides the file paths (picklable, sent with every task)."""
+
+    joints: list[str]
+    metrics: list[str]
+    family_objects: tuple[MetricFamily, ...] = ()
+    convention: str = "default"
+    fps: float | None = None          # for positions files without a frame rate
+    resample: float | None = None     # resample every file to this rate first
+    edges: dict[str, np.ndarray] = field(default_factory=dict)   # quantity -> bin edges
+    groups: dict[str, list[str]] = field(default_factory=dict)   # group name -> joint names
+    sigma: float = 0.1
+    length_tolerance_s: float = 1.0
+    figures: bool = True
+
+    @property
+    def families(self) -> list[str]:
+        """Names of the families that have a metric in ``metrics``, in registration order."""
+        wanted = set(self.metrics)
+        return [f.name for f in self.family_objects if any(m.name in wanted for m in f.metrics)]
+
+    def active(self) -> list[MetricFamily]:
+        names = set(self.families)
+        return [f for f in self.family_objects if f.name in names]
+
+
+@dataclass
+class ScoreResult:
+    """What a scoring run produced; the report and figure writers read it."""
+
+    summary: list[dict]
+    per_sequence: list[dict]
+    per_joint: list[dict]
+    histograms: list[dict]
+    issues: list[str]
+    errors: list[str]
+    fps: float
+    files: dict[str, dict[str, dict]]
+    wrist_tracks: dict[str, list]
+    plan: Plan
+    setup: ScoreSetup
+    convention: Convention
+    bootstrap: int = 0
+    seed: int = 0
+    resampled: list[str] = field(default_factory=list)
+
+
+def _load(path: pathlib.Path, setup: ScoreSetup) -> Any:
+    from evalsuite.motion.ops import resample
+
+    motion = load_motion(path, fallback_fps=setup.fps)
+    if setup.resample is not None and abs(motion.fps - setup.resample) > 1e-9 * setup.resample:
+        motion = resample(motion, setup.resample)
+    return motion
+
+
+def _selected_positions(motion: Any, joints: list[str]) -> np.ndarray:
+    index = {n: i for i, n in enumerate(motion.joint_names)}
+    missing = [j for j in joints if j not in index]
+    if missing:
+        raise InputError(f"skeleton differs from the natural motion: missing joints {', '.join(missing[:8])}"
+                         f"{' ...' if len(missing) > 8 else ''}; score a common subset with --joints",
+                         path=motion.source)
+    return np.asarray(motion.positions()[:, [index[j] for j in joints]])
+
+
+def _measure(motion: Any, pos: np.ndarray, setup: ScoreSetup, conv: Convention, natural_pos: np.ndarray | None,
+             onsets: np.ndarray | None, natural_cache: dict) -> dict:
+    if len(pos) < 4:
+        raise InputError(f"only {len(pos)} frames; at least 4 are needed (jerk uses 3rd differences)",
+                         path=motion.source)
+    ctx = SequenceContext(motion, pos, setup, conv, natural_pos, onsets, natural_cache)
+    for family in setup.active():
+        family.measure(ctx)
+    if setup.figures:
+        ctx.record["wrist_track"] = wrist_track(motion)
+    return ctx.record
+
+
+def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path | None, ScoreSetup]) -> dict:
+    """Measure one sequence in every condition: ``task = (name, [(condition, path), ...], audio, setup)``.
+
+    The first entry is the natural file. Returns ``{"name", "records": {condition: record}}`` where a
+    record holds numpy summaries, or ``{"error": message}`` for a file that could not be scored.
+    """
+    name, entries, audio_path, setup = task
+    conv = get_convention(setup.convention)
+    records: dict[str, dict] = {}
+    onsets = None
+    audio_error = None
+    if audio_path is not None and any(f.needs_audio for f in setup.active()):
+        from evalsuite.audio import read_wav
+
+        try:
+            signal, sr = read_wav(audio_path)
+            onsets = audio_onsets(signal.mean(axis=1), sr)
+        except InputError as exc:
+            audio_error = str(exc)
+    natural_pos = None
+    natural_cache: dict = {}
+    for k, (cond, path) in enumerate(entries):
+        try:
+            motion = _load(path, setup)
+            pos = _selected_positions(motion, setup.joints)
+            if k == 0:
+                natural_pos = pos
+            rec = _measure(motion, pos, setup, conv, natural_pos, onsets, natural_cache)
+            rec["sha256"] = file_sha256(path)
+            rec["path"] = str(path)
+            if getattr(motion, "resampled_from", None):
+                rec["resampled_from"] = motion.resampled_from
+            if audio_error:
+                rec.setdefault("warnings", []).append(audio_error)
+            records[cond] = rec
+        except InputError as exc:
+            records[cond] = {"error": str(exc), "path": str(path)}
+        except Exception as exc:  # a broken file must not lose the other results
+            records[cond] = {"error": f"{path}: cannot be scored ({type(exc).__name__}: {exc})", "path": str(path)}
+    return {"name": name, "records": records}
+
+
+def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict:
+    """99.5th percentiles of pooled speed and acceleration of one natural file (for automatic bins)."""
+    from evalsuite.metrics.kinematics import derivative_norms
+
+    path, setup = task
+    conv = get_convention(setup.convention)
+    try:
+        motion = _load(path, setup)
+        pos = _selected_positions(motion, setup.joints)
+        out: dict[str, Any] = {"path": str(path), "fps": motion.fps}
+        for q, order in (("speed", 1), ("acceleration", 2)):
+            n = derivative_norms(pos, order, conv.rate(motion.fps))
+            out[q] = float(np.percentile(n, 99.5)) if n.size else float("nan")
+        return out
+    except Exception as exc:  # reported by the main pass
+        return {"path": str(path), "error": str(exc)}
+
+
+class _Folder:
+    """Folds each result's bulky summaries into per-condition sums, in task order (see module docstring)."""
+
+    def __init__(self, setup: ScoreSetup, reference: str, keep: bool):
+        self.families, self.reference, self.keep = setup.active(), reference, keep
+        self.acc: dict[str, dict] = {}
+
+    def __call__(self, index: int, result: dict) -> dict:
+        records = result["records"]
+        nat = records.get(self.reference, {})
+        for cond, rec in records.items():
+            if "error" in rec or "error" in nat or not nat:
+                continue
+            slot = self.acc.setdefault(cond, {})
+            for family in self.families:
+                family.fold(index, cond, rec, nat, slot)
+        if not self.keep:  # every condition of this sequence has used them now
+            for rec in records.values():
+                for family in self.families:
+                    family.drop(rec)
+        return result
+
+
+def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict], *, bootstrap: int = 0, seed: int = 0,
+                   strict: bool = False, acc: dict | None = None) -> ScoreResult:
+    """Summary, per-sequence and per-joint rows, pooled histograms and issues from task results."""
+    if acc is None:
+        folder = _Folder(setup, plan.reference, keep=True)
+        for i, res in enumerate(results):
+            folder(i, res)
+        acc = folder.acc
+    conv = get_convention(setup.convention)
+    records: dict[str, dict[str, dict]] = {c: {} for c in plan.conditions}
+    issues, errors = list(plan.issues), []
+    for res in results:
+        for cond, rec in res["records"].items():
+            if "error" in rec:
+                errors.append(rec["error"])
+                continue
+            issues.extend(f"{cond}/{res['name']}: {w}" for w in rec.get("warnings", []))
+            records[cond][res["name"]] = rec
+    if errors and strict:
+        raise InputError(f"{len(errors)} file(s) could not be scored (--strict): " + "; ".join(errors[:5]))
+    issues.extend(f"skipped: {e}" for e in errors)
+    fps_by_cond = {c: sorted({r["fps"] for r in recs.values()}) for c, recs in records.items() if recs}
+    all_fps = sorted({f for v in fps_by_cond.values() for f in v})
+    if not records[plan.reference]:
+        raise InputError("no natural file could be scored: " + "; ".join(errors[:5]), field="reference")
+    if len(all_fps) > 1:
+        detail = "; ".join(f"{c}: {', '.join(f'{f:g}' for f in v)} fps" for c, v in fps_by_cond.items())
+        raise InputError(f"frame rates differ ({detail}); evalsuite does not mix rates: pass --resample FPS "
+                         "to resample every file to one rate", field="fps")
+    info = {name: mi for name, (_, mi) in metric_index({f.name: f for f in setup.family_objects}).items()}
+    out = ScoreResult([], [], [], [], issues, errors, all_fps[0], {}, {}, plan, setup, conv, bootstrap, seed)
+    ref = records[plan.reference]
+    for ci_, cond in enumerate(plan.conditions):
+        recs = records[cond]
+        names = sorted(s for s in recs if s in ref)
+        if not names:
+            issues.append(f"condition {cond!r}: no sequence could be scored together with its natural one")
+            continue
+        weights = bootstrap_weights(len(names), bootstrap, seed, ci_) if bootstrap else None
+        ctx = ReduceContext(cond, plan.reference, names, recs, ref, setup, conv, weights, acc.get(cond, {}),
+                            info=info, seed=seed)
+        for family in setup.active():
+            family.reduce(ctx)
+        out.summary += ctx.summary
+        out.per_sequence += ctx.per_sequence
+        out.per_joint += ctx.per_joint
+        out.histograms += ctx.histograms
+        issues += ctx.issues
+    out.files = {c: {s: {"path": r["path"], "sha256": r["sha256"], "n_frames": r["n_frames"]}
+                     for s, r in sorted(records[c].items())} for c in plan.conditions}
+    out.wrist_tracks = {c: [records[c][s]["wrist_track"] for s in sorted(records[c])
+                            if records[c][s].get("wrist_track") is not None] for c in plan.conditions}
+    out.resampled = sorted({f"{r['path']} ({r['resampled_from']:g} -> {r['fps']:g} fps)"
+                            for recs in records.values() for r in recs.values() if r.get("resampled_from")})
+    return out
+
+
+def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path], *, joints: object = None,
+                  metrics: str | Sequence[str] | None = None, convention: str = "default",
+                  audio_dir: str | pathlib.Path | None = None, fps: float | None = None,
+                  resample: float | None = None, speed_bins: str | tuple[float, float] | None = None,
+                  acceleration_bins: str | tuple[float, float] | None = None,
+                  groups: Sequence[str] = DEFAULT_GROUPS, sigma: float = 0.1, bootstrap: int = 0, seed: int = 0,
+                  jobs: int = 1, dask_address: str | None = None, strict: bool = False, progress: bool = True,
+                  figures: bool = True, extra_families: Sequence[MetricFamily] = ()) -> ScoreResult:
+    """Score condition folders against a natural folder with every registered family (plus
+    ``extra_families``, e.g. FGD with a trained model) -> :class:`ScoreResult`."""
+    conv = get_convention(convention)
+    families = {**registered_families(), **{f.name: f for f in extra_families}}
+    metric_list = resolve_metrics(metrics, audio_dir is not None, families)
+    for fam in extra_families:  # a family given for this run is wanted even when not named
+        metric_list += [m.name for m in fam.metrics if m.name not in metric_list and fam.default]
+    plan = plan_scoring(reference, conditions, joints, audio_dir, strict, fps)
+    setup = ScoreSetup(joints=plan.joints, metrics=metric_list, family_objects=tuple(families.values()),
+                       convention=conv.name, fps=fps, resample=resample,
+                       groups=resolve_groups(groups, plan.joints), sigma=sigma, figures=figures)
+    if "histograms" in setup.families:
+        setup.edges = _edges(plan, setup, conv, speed_bins, acceleration_bins, jobs, dask_address, progress)
+    tasks, weights = [], []
+    for s in plan.names:
+        entries = [(c, plan.files[c][s]) for c in plan.conditions if s in plan.files[c]]
+        tasks.append((s, entries, plan.audio.get(s), setup))
+        weights.append(len(entries))
+    folder = _Folder(setup, plan.reference, keep=bool(bootstrap))
+    results = run(score_sequence, tasks, jobs=jobs, dask_address=dask_address, progress=progress,
+                  weights=weights, desc="scoring", consume=folder, describe=_describe_task)
+    return reduce_results(plan, setup, results, bootstrap=bootstrap, seed=seed, strict=strict, acc=folder.acc)
+
+
+def _describe_task(task: tuple) -> str:
+    return f"sequence {task[0]!r}"
+
+
+def _parse_bins(spec: str | tuple[float, float] | None) -> tuple[float, float] | None:
+    if spec is None or isinstance(spec, tuple):
+        return spec
+    try:
+        top, width = (float(v) for v in str(spec).split(":"))
+    except ValueError:
+        raise InputError(f"expected bins as MAX:WIDTH (e.g. 250:2.5), got {spec!r}", field="bins") from None
+    return top, width
+
+
+def _edges(plan: Plan, setup: ScoreSetup, conv: Convention, speed_bins: Any, acceleration_bins: Any, jobs: int,
+           dask_address: str | None, progress: bool) -> dict[str, np.ndarray]:
+    given = {"speed": _parse_bins(speed_bins) or conv.bins("speed"),
+             "acceleration": _parse_bins(acceleration_bins) or conv.bins("acceleration")}
+    edges = {q: reference_edges(*b) for q, b in given.items() if b is not None}
+    auto = [q for q, b in given.items() if b is None]
+    if auto:
+        ref_files = [plan.files[plan.reference][s] for s in plan.names]
+        probes = run(probe_ranges, [(p, setup) for p in ref_files], jobs=jobs, dask_address=dask_address,
+                     progress=progress, desc="bin ranges")
+        for q in auto:
+            vals = [p[q] for p in probes if "error" not in p and np.isfinite(p[q])]
+            edges[q] = automatic_edges(max(vals) if vals else 1.0)
+    return edges
