@@ -8,10 +8,9 @@ The stable Python API::
 """
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
-from evalsuite.errors import BVHError, InputError, MotionError  # noqa: E402
-from evalsuite.motion import Motion, Skeleton, load_motion, save_motion  # noqa: E402
+from evalsuite._version import __version__
+from evalsuite.errors import BVHError, InputError, MotionError
+from evalsuite.motion import Motion, Skeleton, load_motion, save_motion
 
 __all__ = [
     "__version__",

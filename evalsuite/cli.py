@@ -11,7 +11,7 @@ import importlib.util
 
 import click
 
-from evalsuite import __version__
+from evalsuite._version import __version__
 from evalsuite.errors import InputError
 
 # name -> "module:attribute"; the attribute is a click command or group.

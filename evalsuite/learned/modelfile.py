@@ -29,7 +29,7 @@ import pathlib
 import numpy as np
 import torch
 
-from evalsuite import __version__
+from evalsuite._version import __version__
 from evalsuite.errors import InputError
 from evalsuite.learned.network import LATENT_DIM, Architecture, EmbeddingNet
 from evalsuite.learned.representation import cut_windows, pose_vectors

@@ -124,7 +124,7 @@ def provenance(result: ScoreResult) -> dict:
     """What a run depended on: versions, convention, joints, fps, bins, every input file's SHA-256."""
     import scipy
 
-    from evalsuite import __version__
+    from evalsuite._version import __version__
 
     plan, setup, conv = result.plan, result.setup, result.convention
     return {
