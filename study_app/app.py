@@ -1,16 +1,19 @@
 """Application factory of the study server."""
 from __future__ import annotations
 
-import hmac
 import os
 import pathlib
 
 from flask import Flask, jsonify, render_template, request
 from flask_wtf.csrf import CSRFError, CSRFProtect
+from jinja2 import ChoiceLoader, FileSystemLoader
 
 from study_app.definition import Study, load_study
 from study_app.design import default_plans_path, read_plans
 from study_app.errors import StudyStateError
+from study_app.context import install
+from study_app.pages import page_kinds
+from study_app.policy import Rules
 from study_app.storage import Store, init_db, make_engine
 
 csrf = CSRFProtect()
@@ -66,11 +69,12 @@ def create_app(config: dict) -> Flask:
     engine = make_engine(url)
     if init:
         init_db(engine, study, plans)
-    store = Store(engine)
-    store.configure(study)
-    app.extensions["study"] = study
-    app.extensions["store"] = store
+    install(app, study, Store(engine, Rules.of(study)))
 
+    # plug-in page kinds may keep their templates outside the package
+    folders = [k.template_folder for k in page_kinds().values() if k.template_folder]
+    if folders:
+        app.jinja_loader = ChoiceLoader([app.jinja_loader, FileSystemLoader(folders)])
     csrf.init_app(app)
     app.context_processor(lambda: {"study": study})
 
@@ -111,10 +115,6 @@ def _error(code: int, message: str):
     if request.is_json or request.accept_mimetypes.best == "application/json":
         return jsonify(error=message), code
     return render_template("message.html", title="Error", message=message), code
-
-
-def check_token(given: str, expected: str) -> bool:
-    return hmac.compare_digest(given.encode(), expected.encode())
 
 
 def create_app_from_env() -> Flask:

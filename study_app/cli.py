@@ -104,7 +104,9 @@ def serve(study_file, db, instance, host, port, admin_token, secret_key, secure_
     app = create_app({"STUDY": study_file, "DATABASE_URL": url, "SECRET_KEY": secret_key,
                       "ADMIN_TOKEN": admin_token, "SESSION_COOKIE_SECURE": secure_cookies,
                       "INSTANCE_PATH": str(folder)})
-    st = app.extensions["study"]
+    from study_app.context import study_of
+
+    st = study_of(app)
     base = f"http://{host}:{port}"
     click.echo(f"study {st.id!r}, database {url}")
     click.echo(f"participant link: {base}/start/{st.id}" + (

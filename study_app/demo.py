@@ -33,7 +33,8 @@ def _stimuli(out_dir: pathlib.Path, target: pathlib.Path, echo) -> pathlib.Path:
 
 def study_definition(manifest_path: pathlib.Path, study_dir: pathlib.Path) -> dict:
     """A small pairwise + MUSHRA study over every condition of the manifest."""
-    from study_app.definition import attention_pool, load_manifest
+    from study_app.definition import load_manifest
+    from study_app.pages import get_kind
 
     manifest = load_manifest(manifest_path)
     stimuli = [s for s in manifest.stimuli if s.kind == "stimulus" and not s.mismatched]
@@ -54,7 +55,7 @@ def study_definition(manifest_path: pathlib.Path, study_dir: pathlib.Path) -> di
                            "text": "How human-like does the gesture motion appear?"}}
     for block, ptype in ((pairwise, "pairwise"), (mushra, "mushra")):
         cfg = {"levels": 3, "bands": ["Bad", "Poor", "Fair", "Good", "Excellent"], "segments": segments}
-        if attention_pool(manifest, block["id"], ptype, cfg) and block["pages"] >= 2:
+        if get_kind(ptype).attention_pool(manifest, block["id"], cfg) and block["pages"] >= 2:
             block["attention_checks"] = [block["pages"] - 1 if ptype == "pairwise" else 1]
     return {
         "id": "evalsuite-demo",

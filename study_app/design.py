@@ -27,14 +27,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import pathlib
-import random
 from collections import Counter
 
-from study_app.definition import BLOCK_TYPES, Study, attention_pool
 from study_app.errors import StudyDefinitionError
-from study_app.headphones import trial_orders
+from study_app.model import Study
+from study_app.pages import get_kind
 
 PLANS_FORMAT = "evalsuite-study-plans/1"
 
@@ -69,103 +67,40 @@ class _Lookup:
         return (self.mismatched if mismatched else self.matched)[(condition, segment)]
 
 
-def _segment_for(g: int, n_items: int, segments: list[str]) -> str:
-    period = math.lcm(max(n_items, 1), len(segments))
-    return segments[(g + g // period) % len(segments)]
+class _PlanBuilder:
+    """What page kinds need to expand a definition page: the study, the stimulus lookup, the kinds."""
 
-
-def _regular_page(block, g: int, lookup: _Lookup, segments: list[str]) -> dict:
-    cfg = block.cfg
-    if block.type == "pairwise":
-        if cfg["mismatched"]:
-            conds = cfg["conditions"]
-            cond = conds[g % len(conds)]
-            seg = _segment_for(g, len(conds), segments)
-            a, b = lookup.file(cond, seg), lookup.file(cond, seg, mismatched=True)
-            occurrence = g // len(conds)
-        else:
-            pairs = cfg["pairs"]
-            x, y = pairs[g % len(pairs)]
-            seg = _segment_for(g, len(pairs), segments)
-            a, b = lookup.file(x, seg), lookup.file(y, seg)
-            occurrence = g // len(pairs)
-        # Alternates for every item (balance) and differs between neighbouring items (so one
-        # session does not show every A on the same side).
-        n_items = len(cfg["conditions"] if cfg["mismatched"] else cfg["pairs"])
-        flip = (occurrence + g % n_items) % 2
-        return {"type": "pairwise", "segment": seg, "a": a, "b": b,
-                "position_a": "left" if flip == 0 else "right"}
-    if block.type == "mushra":
-        seg = segments[g % len(segments)]
-        slots = [(c, "") for c in cfg["conditions"]]
-        slots += [(cfg[r], r) for r in ("reference", "anchor") if cfg.get(r)]
-        # Each condition in each slot equally often over len(slots) consecutive pages; the
-        # shift moves every lcm(...) pages so slots and segments are not confounded.
-        shift = (g + g // math.lcm(len(segments), len(slots))) % len(slots)
-        slots = slots[shift:] + slots[:shift]
-        return {"type": "mushra", "segment": seg, "slots": [lookup.file(c, seg) for c, _ in slots],
-                "roles": [r for _, r in slots]}
-    conds = cfg["conditions"]
-    cond = conds[g % len(conds)]
-    seg = _segment_for(g, len(conds), segments)
-    return {"type": "likert", "segment": seg, "stimulus": lookup.file(cond, seg)}
-
-
-def _check_page(block, k: int, pool, lookup: _Lookup) -> dict:
-    """The k-th attention-check page of this block (over all sessions)."""
-    cfg = block.cfg
-    check = pool[k % len(pool)]
-    if block.type == "pairwise":
-        conds = cfg["conditions"]
-        partner_seg = check.segment if check.segment in cfg["segments"] else cfg["segments"][0]
-        partner = lookup.file(conds[k % len(conds)], partner_seg)
-        return {"type": "pairwise", "segment": check.segment, "a": check.file, "b": partner,
-                "position_a": "left" if (k // len(pool)) % 2 == 0 else "right", "check": True}
-    if block.type == "mushra":
-        page = _regular_page(block, k, lookup, [check.segment])
-        replaceable = [i for i, r in enumerate(page["roles"]) if not r]
-        slot = replaceable[k % len(replaceable)]
-        page["slots"][slot] = check.file
-        page["check_slot"] = slot
-        return page
-    return {"type": "likert", "segment": check.segment, "stimulus": check.file, "check": True}
+    def __init__(self, study: Study):
+        self.study = study
+        self.lookup = _Lookup(study)
+        self.kind = get_kind
 
 
 def build_plans(study: Study) -> dict:
     """Session plans for ``study`` as a JSON-serialisable dict (see module docstring)."""
-    lookup = _Lookup(study)
+    builder = _PlanBuilder(study)
     blocks = study.blocks
-    pools = {bid: attention_pool(study.manifest, bid, b.type, b.cfg) for bid, b in blocks.items()}
-    check_counter = Counter()
+    kinds = {bid: get_kind(b.type) for bid, b in blocks.items()}
+    pools = {bid: kinds[bid].attention_pool(study.manifest, bid, b.cfg) for bid, b in blocks.items()}
+    check_counter: Counter = Counter()
     plans = []
     for s in range(study.sessions):
         pages = []
         for page in study.pages:
-            if page.type in BLOCK_TYPES:
-                k = page.cfg["pages"]
-                regular = [_regular_page(page, s * k + j, lookup, page.cfg["segments"]) for j in range(k)]
-                rows = williams_rows(k)
-                ordered = [regular[i] for i in rows[s % len(rows)]]
-                for pos in page.cfg["attention_checks"]:
-                    ordered.insert(pos, _check_page(page, check_counter[page.id], pools[page.id], lookup))
-                    check_counter[page.id] += 1
-                for j, p in enumerate(ordered):
-                    pages.append({"page": f"{page.id}-{j + 1:02d}", "block": page.id, "training": False,
-                                  "check": bool(p.pop("check", False) or "check_slot" in p), **p})
-            elif page.type == "training":
-                block = blocks[page.cfg["of"]]
-                n = page.cfg["count"]
-                segments = page.cfg["segments"] or block.cfg["segments"]
-                for j in range(n):
-                    p = _regular_page(block, s * n + j, lookup, segments)
-                    pages.append({"page": f"{page.id}-{j + 1:02d}", "block": block.id, "training": True,
-                                  "check": False, **p})
-            elif page.type == "headphone_check":
-                rng = random.Random(f"{study.seed}:{s}:{page.id}")   # str seeds are stable across Pythons
-                pages.append({"page": page.id, "type": page.type,
-                              "trials": trial_orders(page.cfg["trials"], rng)})
-            else:
-                pages.append({"page": page.id, "type": page.type})
+            kind = get_kind(page.type)
+            if not kind.block:
+                pages.extend(kind.plan_pages(page, s, builder))
+                continue
+            k = page.cfg["pages"]
+            regular = [kind.regular_page(page, s * k + j, builder.lookup, page.cfg["segments"]) for j in range(k)]
+            rows = williams_rows(k)
+            ordered = [regular[i] for i in rows[s % len(rows)]]
+            for pos in page.cfg["attention_checks"]:
+                ordered.insert(pos, kind.check_page(page, check_counter[page.id], pools[page.id], builder.lookup))
+                check_counter[page.id] += 1
+            for j, p in enumerate(ordered):
+                pages.append({"page": f"{page.id}-{j + 1:02d}", "block": page.id, "training": False,
+                              "check": bool(p.pop("check", False) or "check_slot" in p), **p})
         plans.append({"key": f"plan-{s:04d}", "pages": pages})
     return {"format": PLANS_FORMAT, "study": study.id, "definition_sha256": study.sha256,
             "manifest_sha256": study.manifest.sha256, "plans": plans}
@@ -209,18 +144,11 @@ def read_plans(path, study: Study) -> dict:
 def balance_report(plans: dict, study: Study) -> dict:
     """Counts that show the balance: per compared pair (with left/right), per MUSHRA slot."""
     by_file = study.manifest.by_file()
-    pairs, slots, positions = Counter(), Counter(), Counter()
+    counts: dict = {"pairs": Counter(), "mushra_slots": Counter()}
     for plan in plans["plans"]:
-        for i, p in enumerate(plan["pages"]):
-            if p.get("training") or p.get("type") not in BLOCK_TYPES:
+        for p in plan["pages"]:
+            kind = get_kind(p["type"])
+            if p.get("training") or not kind.block:
                 continue
-            if p["type"] == "pairwise" and not p["check"]:
-                a, b = by_file[p["a"]], by_file[p["b"]]
-                key = (p["block"], a.condition, b.condition + (":mismatched" if b.mismatched else ""))
-                pairs[key + (p["position_a"],)] += 1
-            elif p["type"] == "mushra":
-                for k, f in enumerate(p["slots"]):
-                    if k != p.get("check_slot"):
-                        slots[(p["block"], by_file[f].condition, k)] += 1
-            positions[(p["block"], p["page"])] += 1
-    return {"pairs": pairs, "mushra_slots": slots}
+            kind.balance(p, by_file, counts)
+    return counts

@@ -13,8 +13,8 @@ import csv
 import io
 import json
 
-from study_app.answers import pairwise_expected_screen, screen_side
-from study_app.definition import Study, _mushra_expected
+from study_app.model import Study
+from study_app.pages import get_kind
 
 COLUMNS = ["study", "participant", "platform", "session", "session_status", "page", "page_type",
            "trial", "question", "scale", "segment", "condition", "condition_a", "condition_b",
@@ -30,29 +30,18 @@ def _session_status(status: str) -> str:
     return status if status in ("finished", "failed") else "incomplete"
 
 
-def _ab(side: str, position_a: str) -> str:
-    if side == "equal":
-        return "tie"
-    return "a" if side == position_a else "b"
-
-
-def _condition(stim) -> str:
-    if stim.kind == "attention":
-        return stim.condition or "attention_check"
-    return stim.condition + (":mismatched" if stim.mismatched else "")
-
-
 def result_rows(study: Study, dump: dict) -> list[dict]:
-    by_file = study.manifest.by_file()
+    rows = []
     sessions = {s.id: s for s in dump["sessions"]}
     order = {s.id: i for i, s in enumerate(dump["sessions"])}
-    rows = []
     for ans in sorted(dump["answers"], key=lambda a: (order[a.session_id], a.page_index)):
         sess = sessions[ans.session_id]
         page = dump["plans"][sess.plan_id].pages[ans.page_index] if sess.plan_id in dump["plans"] else None
-        if page is None or page["type"] not in ("pairwise", "mushra", "likert"):
+        if page is None:
             continue
-        block = study.page(page["block"]).cfg
+        kind = get_kind(page["type"])
+        if not kind.block:
+            continue   # consent and questionnaire answers are in the raw JSON only
         base = {"study": study.id, "participant": sess.participant, "platform": sess.platform,
                 "session": sess.id, "session_status": _session_status(sess.status),
                 "page": page["page"], "page_type": page["type"], "trial": ans.page_index,
@@ -60,49 +49,11 @@ def result_rows(study: Study, dump: dict) -> list[dict]:
                 "is_training": int(bool(page.get("training"))), "is_attention_check": 0,
                 "attention_expected": "", "attention_passed": "",
                 "shown_at": _iso(ans.shown_at), "answered_at": _iso(ans.answered_at)}
-        data = ans.data
-        if page["type"] == "pairwise":
-            a, b = by_file[page["a"]], by_file[page["b"]]
-            expected = ""
-            if page.get("check"):
-                side, strength = pairwise_expected_screen(a.expected, page["position_a"])
-                expected = _ab(side, page["position_a"]) + (f"/{strength}" if strength else "")
-            for q in block["questions"]:
-                side, strength = screen_side(data["choices"][q["id"]])
-                rows.append({**base, "question": q["id"], "condition_a": _condition(a),
-                             "condition_b": _condition(b), "position_a": page["position_a"],
-                             "answer": _ab(side, page["position_a"]), "strength": strength,
-                             "reasons": ";".join(data.get("reasons", [])),
-                             **_check_cols(page, ans, expected)})
-        elif page["type"] == "mushra":
-            for k, file in enumerate(page["slots"]):
-                stim = by_file[file]
-                is_check = k == page.get("check_slot")
-                row = {**base, "question": block["question"]["id"], "condition": _condition(stim),
-                       "position_a": k, "answer": data["ratings"][k], "role": page["roles"][k]}
-                if is_check:
-                    lo, hi = _mushra_expected(stim.expected, block["bands"])
-                    expected = str(stim.expected) if lo == hi else f"{lo:g}-{hi:g}"
-                    row.update(is_attention_check=1, attention_expected=expected,
-                               attention_passed=int(bool(ans.attention_passed)))
-                rows.append(row)
-        else:
-            stim = by_file[page["stimulus"]]
-            for st in block["statements"]:
-                rows.append({**base, "question": st["id"], "scale": st["scale"],
-                             "condition": _condition(stim), "answer": data["ratings"][st["id"]],
-                             **_check_cols(page, ans, stim.expected if page.get("check") else "")})
+        rows.extend(kind.export_rows(study, page, ans, base))
     for r in rows:
         for c in COLUMNS:
             r.setdefault(c, "")
     return rows
-
-
-def _check_cols(page, ans, expected):
-    if not page.get("check"):
-        return {}
-    return {"is_attention_check": 1, "attention_expected": expected,
-            "attention_passed": int(bool(ans.attention_passed))}
 
 
 def results_csv(study: Study, dump: dict) -> str:

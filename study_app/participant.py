@@ -9,13 +9,16 @@ from __future__ import annotations
 import re
 import secrets
 import urllib.parse
+from functools import partial
 
-from flask import (Blueprint, abort, current_app, jsonify, redirect, render_template, request,
+from flask import (Blueprint, abort, jsonify, redirect, render_template, request,
                    session, url_for)
 
-from study_app.answers import (PayloadError, n_slots, parse_answer, parse_events, parse_token,
-                               score_attention)
-from study_app.definition import PAIRWISE_ANSWERS, PAIRWISE_LABELS
+from study_app.answers import n_slots, parse_events, parse_token
+from study_app.context import get_store, get_study
+from study_app.pages import get_kind
+from study_app.payload import PayloadError
+from study_app.submission import validate_submission
 
 bp = Blueprint("participant", __name__)
 
@@ -25,12 +28,7 @@ MTURK_PREVIEW = "ASSIGNMENT_ID_NOT_AVAILABLE"
 MTURK_SUBMIT_HOSTS = ("www.mturk.com", "workersandbox.mturk.com")
 
 
-def _study():
-    return current_app.extensions["study"]
-
-
-def _store():
-    return current_app.extensions["store"]
+_study, _store = get_study, get_store
 
 
 def _message(title, message, code=200, **extra):
@@ -131,8 +129,10 @@ def page(sid):
     data = _page_data(study, spec, index, len(pages), sid)
     data.update(draft=view.draft or {}, played=sorted(s for s in played["play"] if s is not None),
                 ended=sorted(s for s in played["ended"] if s is not None))
+    kind = get_kind(spec["type"])
     return render_template("page.html", study=study, spec=spec, data=data, page=_page_cfg(study, spec),
-                           index=index, total=len(pages))
+                           index=index, total=len(pages), kind_template=kind.template_name,
+                           kind_script=kind.script)
 
 
 def _page_cfg(study, spec):
@@ -147,18 +147,10 @@ def _page_data(study, spec, index, total, sid) -> dict:
             "events_url": url_for("participant.events", sid=sid, index=index),
             "require_full_playback": study.require_full_playback,
             "min_width": study.min_width}
-    slots = n_slots(spec)
-    data["videos"] = [url_for("media.video", sid=sid, index=index, slot=k) for k in range(slots)]
-    if spec["type"] == "headphone_check":
-        data["play_once"] = True          # Woods et al.: each trial is heard once
-    if spec["type"] in ("pairwise", "mushra", "likert"):
-        data["training"] = bool(spec.get("training"))
-        data["muted"] = _page_cfg(study, spec)["muted"]
-    if spec["type"] == "pairwise":
-        levels = _page_cfg(study, spec)["levels"]
-        data["options"] = [{"value": v, "label": lbl} for v, lbl in
-                           zip(PAIRWISE_ANSWERS[levels], PAIRWISE_LABELS[levels])]
-        data["reasons_required"] = _page_cfg(study, spec)["reasons_required"]
+    kind = get_kind(spec["type"])
+    data["done_word"] = kind.done_word
+    data["videos"] = [url_for("media.video", sid=sid, index=index, slot=k) for k in range(kind.n_slots(spec))]
+    data.update(kind.page_data(study, spec, _page_cfg(study, spec)))
     return data
 
 
@@ -201,36 +193,8 @@ def answer(sid, index):
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
 
-    def evaluate(db, sess, pages):
-        if not 0 <= index < len(pages):
-            raise PayloadError("no such page")
-        spec = pages[index]
-        data = parse_answer(study, spec, body.get("answer"))
-        events = parse_events(body.get("events"), n_slots(spec))
-        slots = n_slots(spec)
-        if slots:
-            kind = "ended" if study.require_full_playback else "play"
-            seen = store.slots_with(db, sid, index, kind) | {
-                e["slot"] for e in events if e["kind"] == kind}
-            if not set(range(slots)) <= seen:
-                what = "to the end " if kind == "ended" else ""
-                media = "sound" if spec["type"] == "headphone_check" else "video"
-                raise PayloadError(f"please play every {media} {what}before answering")
-        if spec["type"] == "consent":
-            width = body.get("width")
-            if isinstance(width, int) and not isinstance(width, bool):
-                if width < study.min_width:
-                    raise PayloadError(f"please use a browser window at least {study.min_width} "
-                                       "pixels wide")
-                data["width"] = width
-        if (spec["type"] == "headphone_check" and not data["passed"]
-                and study.page(spec["page"]).cfg["on_fail"] == "end"):
-            data["_end_reason"] = "headphone_check"
-        data["_client_rt_ms"] = client_rt
-        return data, score_attention(study, spec, data), events
-
     try:
-        status, ans, sess = store.submit(sid, index, token, evaluate)
+        status, ans, sess = store.submit(sid, index, token, partial(validate_submission, study, index, body))
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
     nxt = url_for("participant.page", sid=sid)

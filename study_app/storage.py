@@ -23,6 +23,7 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
 from study_app.design import plans_digest
 from study_app.errors import StudyStateError
+from study_app.policy import Rules, SessionState, after_answer, plan_after_end
 
 
 def utcnow() -> dt.datetime:
@@ -187,8 +188,10 @@ def init_db(engine, study, plans: dict):
 class Store:
     """All database operations of the app; each method is one transaction."""
 
-    def __init__(self, engine):
+    def __init__(self, engine, rules: Rules | None = None):
+        """``rules``: the study's session policy settings (:class:`study_app.policy.Rules`)."""
         self.engine = engine
+        self.rules = rules or Rules()
         self.Session = sessionmaker(engine, expire_on_commit=False)
         # For reads only: never writes, so on SQLite it does not take the write lock.
         self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
@@ -342,13 +345,15 @@ class Store:
             Event.session_id == session_id, Event.page_index == page_index,
             Event.kind == kind)))
 
-    def submit(self, session_id: str, page_index: int, token: str, evaluate):
+    def submit(self, session_id: str, page_index: int, token: str, validate):
         """Store the answer to page ``page_index`` once, idempotently.
 
-        ``evaluate(db, sess, pages)`` validates and returns ``(data, attention_passed,
-        events)`` or raises. Returns ``(status, answer, session)`` with status ``"stored"``,
-        ``"duplicate"`` (same token seen before: the first answer is returned), or
-        ``"conflict"`` (this page already has a different answer / is not the current page).
+        ``validate(pages, played)`` (see :func:`study_app.submission.validate_submission`) returns the
+        :class:`~study_app.submission.Submission` or raises; ``played(kind)`` gives the media slots with an
+        event of that kind on the page. The session then moves on as :func:`study_app.policy.after_answer`
+        says. Returns ``(status, answer, session)`` with status ``"stored"``, ``"duplicate"`` (same token
+        seen before: the first answer is returned), or ``"conflict"`` (this page already has a different
+        answer / is not the current page).
         """
         for attempt in range(3):
             try:
@@ -367,29 +372,28 @@ class Store:
                     if sess.status != "active" or sess.current_page != page_index:
                         return "conflict", None, sess
                     plan = db.get(Plan, sess.plan_id)
-                    data, passed, events = evaluate(db, sess, plan.pages)
-                    self.add_events(db, session_id, page_index, events)
+                    sub = validate(plan.pages, lambda kind: self.slots_with(db, session_id, page_index, kind))
+                    self.add_events(db, session_id, page_index, sub.events)
                     view = db.scalars(select(PageView).where(PageView.session_id == session_id,
                                                              PageView.page_index == page_index)).first()
                     shown = view.shown_at if view else now
-                    client_rt = data.pop("_client_rt_ms", None)
-                    end_reason = data.pop("_end_reason", None)
                     answer = Answer(submit_token=token, session_id=session_id, page_index=page_index,
-                                    page_id=plan.pages[page_index]["page"], data=data,
-                                    attention_passed=passed, shown_at=shown, answered_at=now,
+                                    page_id=plan.pages[page_index]["page"], data=sub.data,
+                                    attention_passed=sub.outcome.attention, shown_at=shown, answered_at=now,
                                     rt_ms=max(0, int((now - shown).total_seconds() * 1000)),
-                                    client_rt_ms=client_rt)
+                                    client_rt_ms=sub.client_rt_ms)
                     db.add(answer)
-                    sess.current_page = page_index + 1
-                    sess.updated_at = now
-                    if passed is True:
-                        sess.passed_checks += 1
-                    elif passed is False:
-                        sess.failed_checks += 1
-                    self._advance(db, sess, plan, now, data, end_reason)
-                    # Sliding reservation: an active participant keeps their plan.
-                    if sess.status == "active":
-                        plan.reserved_until = now + dt.timedelta(minutes=self._reservation_minutes)
+                    state = SessionState(sess.current_page, sess.passed_checks, sess.failed_checks)
+                    move = after_answer(state, sub.outcome, plan.pages, self.rules)
+                    sess.current_page, sess.updated_at = move.current_page, now
+                    sess.passed_checks, sess.failed_checks = move.passed_checks, move.failed_checks
+                    if move.honeypot:
+                        sess.honeypot = True
+                    if move.ended:
+                        self._end(sess, plan, move.status, move.end_reason, now)
+                    else:
+                        # Sliding reservation: an active participant keeps their plan.
+                        plan.reserved_until = now + dt.timedelta(minutes=self.rules.reservation_minutes)
                 return "stored", answer, sess
             except IntegrityError:
                 # A concurrent duplicate (same token, or same page) won the race: re-read.
@@ -402,30 +406,9 @@ class Store:
                 time.sleep(0.05)
         raise RuntimeError("could not store the answer")
 
-    _reservation_minutes = 100.0
-    _max_failed = 2
-    _release_failed = True
-
-    def configure(self, study):
-        self._reservation_minutes = study.reservation_minutes
-        self._max_failed = study.max_failed_attention_checks
-        self._release_failed = study.release_failed
-
-    def _advance(self, db, sess, plan, now, data, end_reason=None):
-        pages = plan.pages
-        if data.get("honeypot"):
-            sess.honeypot = True
-            self._end(sess, plan, "failed", "honeypot", now)
-        elif end_reason:
-            self._end(sess, plan, "failed", end_reason, now)
-        elif sess.failed_checks >= self._max_failed:
-            self._end(sess, plan, "failed", "attention_checks", now)
-        elif pages[sess.current_page]["type"] == "finish":
-            self._end(sess, plan, "finished", "completed", now)
-
     def _end(self, sess, plan, status, reason, now):
         sess.status, sess.end_reason, sess.finished_at = status, reason, now
-        if status == "finished" or not self._release_failed:
+        if plan_after_end(status, self.rules) == "used":
             plan.status, plan.reserved_until = "used", None
         else:
             # A failed participant's data is excluded, so their plan goes to someone else.

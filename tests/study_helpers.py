@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pathlib
+from study_app.context import store_of, study_of
 
 CONDITIONS = ["SYSALPHA", "SYSBETA", "NATURALGT"]
 SEGMENTS = ["seg01", "seg02", "seg03"]
@@ -174,7 +175,7 @@ class Participant:
 
 
 def plan_pages(app, sid):
-    store = app.extensions["store"]
+    store = store_of(app)
     return store.load(sid)[1]
 
 
@@ -216,7 +217,7 @@ def make_answer(study, spec, rng, pass_check=True):
 
 def run_participant(app, client, pid, rng, fail_checks=0, stop_after=None):
     """Go through a whole session; fails the first ``fail_checks`` attention checks."""
-    study = app.extensions["study"]
+    study = study_of(app)
     p = Participant(client, pid)
     r = p.enter()
     assert r.status_code == 302, r.get_data(as_text=True)
@@ -239,7 +240,7 @@ def run_participant(app, client, pid, rng, fail_checks=0, stop_after=None):
 
 def expected_rows(app, participants):
     """What the export must contain, computed from what the clients sent and their plans."""
-    study = app.extensions["study"]
+    study = study_of(app)
     by_file = study.manifest.by_file()
     cond = lambda s: (s.condition or "attention_check") + (":mismatched" if s.mismatched else "")  # noqa: E731
     out = set()

@@ -16,6 +16,9 @@ from study_app import create_app
 from study_app.errors import StudyStateError
 from study_app.storage import Answer, Event, ParticipantSession, Plan
 from study_app.testing import create_database, throwaway_postgres
+from study_app.context import store_of, study_of
+from study_app.pages import Outcome
+from study_app.submission import Submission
 
 _counter = itertools.count()
 
@@ -100,7 +103,7 @@ def test_full_sessions_export_equals_answers(study_dir, db_url):
 
 def test_replayed_and_double_submissions_store_one_answer(study_dir, db_url):
     app = make_app(study_dir, db_url)
-    store = app.extensions["store"]
+    store = store_of(app)
     client = app.test_client()
     p = h.Participant(client, "pdup00001")
     p.enter()
@@ -121,8 +124,8 @@ def test_replayed_and_double_submissions_store_one_answer(study_dir, db_url):
     statuses = []
 
     def submit(token):
-        def evaluate(db, sess, pages):
-            return dict(responses=answer), None, []
+        def evaluate(pages, played):
+            return Submission(data=dict(responses=answer), outcome=Outcome())
         statuses.append(store.submit(p.sid, data["index"], token, evaluate)[0])
 
     threads = [threading.Thread(target=submit, args=("tok-q-same",)) for _ in range(6)]
@@ -213,7 +216,7 @@ def test_stimulus_serving_is_limited_to_the_plan(study_dir, sqlite_url):
 
 def test_condition_names_and_file_names_never_reach_the_participant(study_dir, sqlite_url):
     app = make_app(study_dir, sqlite_url)
-    study = app.extensions["study"]
+    study = study_of(app)
     secrets_ = set(study.conditions) | {s.file for s in study.manifest.stimuli} | {
         s.file.rsplit(".", 1)[0] for s in study.manifest.stimuli}
     rng = np.random.default_rng(5)
@@ -290,7 +293,7 @@ def test_reentry_resumes_or_is_refused_but_never_restarts(study_dir, db_url):
     h.run_participant(app, app.test_client(), "preent003", rng, fail_checks=2)
     r = h.Participant(app.test_client(), "preent003").enter()
     assert r.status_code == 409 and "cannot take part" in r.get_data(as_text=True)
-    with app.extensions["store"].Session() as db:
+    with store_of(app).Session() as db:
         assert db.query(ParticipantSession).filter_by(participant="preent001").count() == 1
 
 
@@ -310,7 +313,7 @@ def test_resume_disabled_refuses_reentry(study_dir, sqlite_url):
 
 def test_attention_failures_end_the_session_and_release_the_plan(study_dir, db_url):
     app = make_app(study_dir, db_url)
-    store = app.extensions["store"]
+    store = store_of(app)
     p, r = h.run_participant(app, app.test_client(), "pattn0001", np.random.default_rng(4), fail_checks=2)
     assert r.status_code == 200 and "did not pass enough" in r.get_data(as_text=True)
     with store.Session() as db:
@@ -335,7 +338,7 @@ def test_honeypot_ends_the_session(study_dir, sqlite_url):
     p.enter()
     _, data, csrf = p.page()
     assert p.submit(data, csrf, {"agree": True, "website": "http://spam"}).status_code == 200
-    with app.extensions["store"].Session() as db:
+    with store_of(app).Session() as db:
         sess = db.get(ParticipantSession, p.sid)
         assert sess.honeypot and sess.status == "failed" and sess.end_reason == "honeypot"
 
@@ -343,7 +346,7 @@ def test_honeypot_ends_the_session(study_dir, sqlite_url):
 def test_expired_reservation_is_released_and_cannot_restart(study_dir, db_url):
     import datetime as dt
     app = make_app(study_dir, db_url)
-    store = app.extensions["store"]
+    store = store_of(app)
     a = h.Participant(app.test_client(), "pexpire01")
     a.enter()
     with store.Session.begin() as db:
@@ -424,7 +427,7 @@ def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
         r, data, csrf = p.page()
         if data is None:
             break
-        assert p.submit(data, csrf, h.make_answer(app.extensions["study"], pages[data["index"]], rng)).status_code == 200
+        assert p.submit(data, csrf, h.make_answer(study_of(app), pages[data["index"]], rng)).status_code == 200
     html = r.get_data(as_text=True)
     assert 'action="https://workersandbox.mturk.com/mturk/externalSubmit"' in html
     assert 'name="assignmentId" value="A1"' in html
@@ -447,7 +450,7 @@ def test_videos_must_be_played_before_answering(study_dir, sqlite_url):
     p.enter()
     rng = np.random.default_rng(0)
     data, csrf, spec = _walk_to(app, p, "pairwise", rng)              # the first video page
-    answer = h.make_answer(app.extensions["study"], spec, rng)
+    answer = h.make_answer(study_of(app), spec, rng)
     r = p.submit(data, csrf, answer, played=False)
     assert r.status_code == 422 and "play every video to the end" in r.get_json()["error"]
     only_one = [{"id": "evt-only-one", "kind": "ended", "slot": 0, "t": 1.0, "ms": 1}]
@@ -493,7 +496,7 @@ def _walk_to(app, p, page_type, rng):
         _, data, csrf = p.page()
         if data["type"] == page_type and not pages[data["index"]].get("check"):
             return data, csrf, pages[data["index"]]
-        p.submit(data, csrf, h.make_answer(app.extensions["study"], pages[data["index"]], rng))
+        p.submit(data, csrf, h.make_answer(study_of(app), pages[data["index"]], rng))
 
 
 @pytest.mark.parametrize("page_type,answer,fragment", [
@@ -528,7 +531,7 @@ def test_answers_are_validated_per_page_type(study_dir, sqlite_url, page_type, a
 
 def test_required_reasons_are_not_asked_for_an_equal_judgement(study_dir, sqlite_url):
     app = make_app(study_dir, sqlite_url)
-    assert app.extensions["study"].page("hl").cfg["reasons_required"]
+    assert study_of(app).page("hl").cfg["reasons_required"]
     p = h.Participant(app.test_client(), "preason01")
     p.enter()
     data, csrf, spec = _walk_to(app, p, "pairwise", np.random.default_rng(0))

@@ -31,6 +31,7 @@ from werkzeug.serving import make_server
 import study_helpers as h
 from study_app import create_app
 from study_app.storage import ParticipantSession
+from study_app.context import store_of, study_of
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
@@ -145,7 +146,7 @@ class Driver:
         self.seen_bodies.append(self.page.content())
         data = self.data()
         spec = self.plan()[data["index"]]
-        study = self.env.server.app.extensions["study"]
+        study = study_of(self.env.server.app)
         answer = h.make_answer(study, spec, self.rng, pass_check=pass_check)
         t = spec["type"]
         if t == "consent":
@@ -226,7 +227,7 @@ def test_participant_journey_in_chromium(env):
             assert d.data()["index"] == data["index"]
             assert d.page.input_value("input[name='rating-0']") == "33"
             assert d.page.input_value("input[name='rating-1']") == "77"
-            store = env.server.app.extensions["store"]
+            store = store_of(env.server.app)
             for _ in range(100):   # the keepalive request may land after the reload's GET
                 draft = store.view_current_page(d.sid)[2].draft or {}
                 if draft.get("fields", {}).get("rating-2") == "55":
@@ -268,7 +269,7 @@ def test_participant_journey_in_chromium(env):
     assert f.page.locator("#failure-code").text_content() == "FAIL5678"
 
     # nothing the participants' browsers received names a condition or a stimulus file
-    study = env.server.app.extensions["study"]
+    study = study_of(env.server.app)
     hidden = set(study.conditions) | {s.file for s in study.manifest.stimuli}
     for drv in (d, f):
         drv.seen_bodies.append(drv.page.content())
@@ -329,7 +330,7 @@ def test_mturk_hit_from_preview_to_external_submit(env):
         base = f"{server.url}/start/gesture-mturk?hitId=HIT42"
         d.page.goto(base + "&assignmentId=ASSIGNMENT_ID_NOT_AVAILABLE")
         assert d.page.is_visible("#preview") and "Accept the HIT" in d.page.content()
-        with server.app.extensions["store"].Session() as db_session:
+        with store_of(server.app).Session() as db_session:
             assert db_session.query(ParticipantSession).count() == 0
         d.page.goto(base + "&assignmentId=ASSIGN7&workerId=A3MTURKWORKER1"
                     "&turkSubmitTo=https%3A%2F%2Fworkersandbox.mturk.com")
@@ -370,7 +371,7 @@ def test_mturk_hit_from_preview_to_external_submit(env):
         child = w.page.main_frame.child_frames[0]
         assert child.url.startswith(server.url + "/s/") and "/s/" in child.url
         w.shot("mturk-in-iframe")
-        with server.app.extensions["store"].Session() as db_session:
+        with store_of(server.app).Session() as db_session:
             sess = db_session.query(ParticipantSession).filter_by(participant="A3MTURKWORKER2").one()
             assert sess.current_page == 1 and sess.platform_data["assignmentId"] == "ASSIGN8"
         w.context.close()

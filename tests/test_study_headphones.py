@@ -17,6 +17,7 @@ from study_app import create_app
 from study_app.headphones import (FREQUENCY, GAP_SECONDS, ORDERS, RATE, TONE_SECONDS, correct_choice,
                                   trial_orders, trial_samples, trial_wav)
 from study_app.storage import ParticipantSession, Plan
+from study_app.context import store_of, study_of
 
 
 # ------------------------------------------------------------------------------ the sounds
@@ -99,7 +100,7 @@ def walk_to_screening(app, pid, study_id):
     p = h.Participant(app.test_client(), pid, study_id)
     assert p.enter().status_code == 302
     pages = h.plan_pages(app, p.sid)
-    study = app.extensions["study"]
+    study = study_of(app)
     while True:
         r, data, csrf = p.page()
         if data["type"] == "headphone_check":
@@ -163,7 +164,7 @@ def test_five_of_six_pass_and_the_study_goes_on(folder, tmp_path):
     assert p.submit(data, csrf, {"choices": n_correct_answer(spec, 5)}).status_code == 200
     _, nxt, _ = p.page()
     assert nxt["index"] == data["index"] + 1
-    with app.extensions["store"].Session() as db:
+    with store_of(app).Session() as db:
         sess = db.get(ParticipantSession, p.sid)
         assert sess.status == "active" and sess.failed_checks == 0
 
@@ -176,7 +177,7 @@ def test_a_failed_screening_ends_the_session_with_the_failure_code(folder, tmp_p
     page, nothing, _ = p.page()
     html = page.get_data(as_text=True)
     assert nothing is None and "not listening over" in html and "FAIL5678" in html
-    with app.extensions["store"].Session() as db:
+    with store_of(app).Session() as db:
         sess = db.get(ParticipantSession, p.sid)
         assert (sess.status, sess.end_reason) == ("failed", "headphone_check")
         assert db.get(Plan, sess.plan_id).status == "free"        # the plan goes to someone else

@@ -6,6 +6,8 @@
   var dataEl = document.getElementById("page-data");
   if (!dataEl) return;
   var data = JSON.parse(dataEl.textContent);
+  // client hooks of this page's kind (static/pages/<kind>.js, registered with EvalsuitePages.register)
+  var kind = (window.EvalsuitePages && window.EvalsuitePages.kinds[data.type]) || {};
   var form = document.getElementById("page-form");
   var csrf = document.getElementById("csrf_token").value;
   var next = document.getElementById("next");
@@ -71,7 +73,7 @@
   function markDone(slot) {
     done.add(slot);
     var s = statusEl(slot);
-    if (s) { s.textContent = data.type === "headphone_check" ? "heard" : "watched"; s.classList.add("ok"); }
+    if (s) { s.textContent = data.done_word || "watched"; s.classList.add("ok"); }
     update();
   }
   videos.forEach(function (v) {
@@ -108,72 +110,15 @@
 
   // ---- answers
   function inputs() { return Array.prototype.slice.call(form.querySelectorAll("input, select, textarea")); }
-  function collect() {
-    var t = data.type;
-    if (t === "consent") {
-      var hp = document.getElementById("website");
-      return {agree: document.getElementById("agree").checked, website: hp ? hp.value : ""};
-    }
-    if (t === "instructions") return {};
-    if (t === "headphone_check") {
-      return {choices: Array.prototype.map.call(form.querySelectorAll("fieldset[data-trial]"), function (fs) {
-        var c = fs.querySelector("input:checked");
-        return c ? Number(c.value) : null;
-      })};
-    }
-    if (t === "questionnaire") {
-      var out = {};
-      form.querySelectorAll("[data-qid]").forEach(function (el) { out[el.getAttribute("data-qid")] = el.value; });
-      return out;
-    }
-    if (t === "pairwise") {
-      var choices = {};
-      form.querySelectorAll("fieldset.question").forEach(function (fs) {
-        var c = fs.querySelector("input:checked");
-        choices[fs.getAttribute("data-question")] = c ? c.value : null;
-      });
-      var reasons = [];
-      form.querySelectorAll("input[name=reason]:checked").forEach(function (c) { reasons.push(c.value); });
-      return {choices: choices, reasons: reasons};
-    }
-    if (t === "mushra") {
-      return {ratings: Array.prototype.map.call(form.querySelectorAll("input[type=range]"), function (r) { return Number(r.value); })};
-    }
-    if (t === "likert") {
-      var ratings = {};
-      form.querySelectorAll("tr[data-statement]").forEach(function (tr) {
-        var c = tr.querySelector("input:checked");
-        ratings[tr.getAttribute("data-statement")] = c ? Number(c.value) : null;
-      });
-      return {ratings: ratings};
-    }
-    return {};
-  }
-  function missing() {
-    var t = data.type, a = collect();
+  // The page kind's client hooks (``kind``, set at the top): collect(ctx) -> the answer object;
+  // missing(ctx, answer) -> what is still missing ("" when ready).
+  function context() {
     var need = videos.length - videos.filter(function (v) { return done.has(Number(v.getAttribute("data-slot"))); }).length;
-    if (t === "consent" && !a.agree) return "Please tick the box to agree.";
-    if (t === "headphone_check" && (need || a.choices.indexOf(null) >= 0))
-      return "Play each sound and choose its quietest tone.";
-    if (t === "pairwise") {
-      if (need) return "Watch both videos" + (data.require_full_playback ? " to the end" : "") + " first.";
-      var preferred = false;
-      for (var q in a.choices) {
-        if (!a.choices[q]) return "Please answer every question.";
-        if (a.choices[q] !== "equal") preferred = true;
-      }
-      if (data.reasons_required && preferred && !a.reasons.length) return "Please tick at least one reason.";
-    }
-    if (t === "mushra") {
-      if (need) return "Play every video" + (data.require_full_playback ? " to the end" : "") + " and rate it.";
-      if (touched.size < videos.length) return "Please rate every video (move each slider).";
-    }
-    if (t === "likert") {
-      if (need) return "Watch the video" + (data.require_full_playback ? " to the end" : "") + " first.";
-      for (var s in a.ratings) if (a.ratings[s] === null) return "Please rate every statement.";
-    }
-    return "";
+    return {form: form, data: data, videos: videos, done: done, touched: touched, need: need,
+            toEnd: data.require_full_playback ? " to the end" : ""};
   }
+  function collect() { return kind.collect ? kind.collect(context()) : {}; }
+  function missing() { return kind.missing ? kind.missing(context(), collect()) : ""; }
   function blocked() { return data.min_width && window.innerWidth < data.min_width; }
   function update() {
     inputs().forEach(function (el) {
@@ -260,7 +205,7 @@
     var events = queue.splice(0, MAX_BATCH);
     var body = {token: token, answer: collect(), events: events,
                 client_rt_ms: Math.round(performance.now() - shownAt)};
-    if (data.type === "consent") body.width = window.innerWidth;
+    body.width = window.innerWidth;   // the consent page checks the window is wide enough
     (async function () {
       for (var attempt = 0; attempt < 6; attempt++) {
         var r = null;

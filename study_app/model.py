@@ -1,0 +1,94 @@
+"""The study's data model: stimuli of the manifest, definition pages, the study; and shared constants."""
+from __future__ import annotations
+
+import pathlib
+import re
+from dataclasses import dataclass, field
+
+ID_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+PLATFORMS = ("prolific", "mturk", "anonymous")
+MANIFEST_REQUIRED = ("file", "condition", "segment")
+MANIFEST_KINDS = ("stimulus", "attention")
+
+
+@dataclass(frozen=True)
+class Stimulus:
+    """One row of the stimulus manifest: a blinded video file and what it shows."""
+
+    file: str
+    condition: str
+    segment: str
+    kind: str = "stimulus"          # "stimulus" or "attention"
+    expected: str = ""              # attention checks: the answer an attentive participant gives
+    motion_segment: str = ""        # mismatched stimuli: the segment the motion comes from
+    block: str = ""                 # attention checks: restrict to this block id
+    line: int = 0
+
+    @property
+    def mismatched(self) -> bool:
+        return bool(self.motion_segment) and self.motion_segment != self.segment
+
+
+@dataclass
+class Manifest:
+    path: pathlib.Path
+    root: pathlib.Path              # folder the file names are relative to
+    stimuli: list[Stimulus]
+    sha256: str
+
+    def by_file(self) -> dict[str, Stimulus]:
+        return {s.file: s for s in self.stimuli}
+
+
+@dataclass
+class Page:
+    """One entry of the definition's ``pages`` list (a block expands to several plan pages)."""
+
+    id: str
+    type: str
+    cfg: dict = field(default_factory=dict)
+
+
+@dataclass
+class Study:
+    id: str
+    title: str
+    path: pathlib.Path
+    manifest: Manifest
+    pages: list[Page]
+    platform: str = "anonymous"
+    sessions: int = 10
+    seed: int = 0
+    completion_code: str = ""
+    failure_code: str = ""
+    max_failed_attention_checks: int = 2
+    reservation_minutes: float = 100.0
+    require_full_playback: bool = True
+    min_width: int = 1100
+    block_mobile: bool = True
+    resume: bool = True
+    release_failed: bool = True
+    prolific_study_id: str = ""
+    redirect_seconds: int = 0
+    sha256: str = ""
+
+    @property
+    def blocks(self) -> dict[str, Page]:
+        """Rating pages (``pairwise``, ``mushra``, ``likert``, ... every registered block kind) by id."""
+        from study_app.pages import get_kind
+
+        return {p.id: p for p in self.pages if get_kind(p.type).block}
+
+    def page(self, page_id: str) -> Page:
+        for p in self.pages:
+            if p.id == page_id:
+                return p
+        raise KeyError(page_id)
+
+    @property
+    def conditions(self) -> list[str]:
+        """Every condition name a participant must never see (used by leak checks too)."""
+        return sorted({s.condition for s in self.manifest.stimuli if s.kind == "stimulus"})
+
+    def completion_url(self, code: str) -> str:
+        return f"https://app.prolific.com/submissions/complete?cc={code}"

@@ -1,0 +1,128 @@
+"""``mushra``: several videos of one segment rated on 0-100 sliders (MUSHRA-style, ITU-R BS.1534), with
+an optional hidden reference and anchor; slot order rotates so each condition is in each slot equally
+often."""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from study_app.pages.base import BlockKind, Media, Outcome, export_condition
+from study_app.payload import PayloadError, int_in, only_keys
+
+DEFAULT_BANDS = ["Bad", "Poor", "Fair", "Good", "Excellent"]
+
+
+def expected_interval(expected: str, bands: list[str]) -> tuple[float, float] | None:
+    """(lo, hi) interval an attentive rating falls in before tolerance, or None: a number 0-100, or the
+    name of a band (``Bad`` .. ``Excellent``: equal fifths of the scale)."""
+    if expected.isdigit() and 0 <= int(expected) <= 100:
+        return (int(expected), int(expected))
+    names = [b.lower() for b in bands]
+    if expected.lower() in names:
+        k = names.index(expected.lower())
+        width = 100 / len(bands)
+        return (k * width, (k + 1) * width)
+    return None
+
+
+def check_passes(expected: str, rating: int, bands: list[str], tolerance: int) -> bool:
+    interval = expected_interval(expected, bands)
+    if interval is None:
+        return False
+    return interval[0] - tolerance <= rating <= interval[1] + tolerance
+
+
+class MushraKind(BlockKind):
+    name = "mushra"
+    keys = BlockKind.keys + ("reference", "anchor", "question", "bands", "tolerance")
+    script = "pages/mushra.js"
+    attention_hint = ", segment of this block"
+
+    def load_options(self, chk: Any, page: dict, where: str, cfg: dict, known: list[str]) -> None:
+        for role in ("reference", "anchor"):
+            r = chk.get(page, role, where, str, default="")
+            if r and r not in known:
+                chk.fail(f"{where}.{role}", f"unknown condition {r!r}; expected one of the manifest's "
+                         f"conditions: {', '.join(known)}")
+            if r and r in cfg["conditions"]:
+                chk.fail(f"{where}.{role}", f"{r!r} is also in conditions; the hidden {role} is "
+                         "added to the page by itself")
+            cfg[role] = r
+        q = chk.get(page, "question", where, dict, required=True, expected="a mapping with id and text")
+        cfg["question"] = {"id": chk.ident(q, "id", f"{where}.question"),
+                           "text": chk.get(q, "text", f"{where}.question", str, required=True)}
+        cfg["bands"] = chk.str_list(page, "bands", where, default=list(DEFAULT_BANDS), min_len=2)
+        cfg["tolerance"] = chk.int_range(page, "tolerance", where, 0, 50, default=3)
+
+    def shown_conditions(self, cfg: dict) -> list[str]:
+        return list(cfg["conditions"]) + [c for c in (cfg.get("reference"), cfg.get("anchor")) if c]
+
+    def attention_fits(self, stim: Any, cfg: dict) -> bool:
+        return expected_interval(stim.expected, cfg["bands"]) is not None and stim.segment in cfg["segments"]
+
+    def regular_page(self, block: Any, g: int, lookup: Any, segments: list[str]) -> dict:
+        cfg = block.cfg
+        seg = segments[g % len(segments)]
+        slots = [(c, "") for c in cfg["conditions"]]
+        slots += [(cfg[r], r) for r in ("reference", "anchor") if cfg.get(r)]
+        # Each condition in each slot equally often over len(slots) consecutive pages; the shift moves
+        # every lcm(...) pages so slots and segments are not confounded.
+        shift = (g + g // math.lcm(len(segments), len(slots))) % len(slots)
+        slots = slots[shift:] + slots[:shift]
+        return {"type": "mushra", "segment": seg, "slots": [lookup.file(c, seg) for c, _ in slots],
+                "roles": [r for _, r in slots]}
+
+    def check_page(self, block: Any, k: int, pool: list, lookup: Any) -> dict:
+        check = pool[k % len(pool)]
+        page = self.regular_page(block, k, lookup, [check.segment])
+        replaceable = [i for i, r in enumerate(page["roles"]) if not r]
+        slot = replaceable[k % len(replaceable)]
+        page["slots"][slot] = check.file
+        page["check_slot"] = slot
+        return page
+
+    def balance(self, spec: dict, by_file: dict, counts: dict) -> None:
+        for k, f in enumerate(spec["slots"]):
+            if k != spec.get("check_slot"):
+                counts["mushra_slots"][(spec["block"], by_file[f].condition, k)] += 1
+
+    def n_slots(self, spec: dict) -> int:
+        return len(spec.get("slots", []))
+
+    def media(self, study: Any, spec: dict, slot: int) -> Media:
+        return Media(file=spec["slots"][slot])
+
+    def parse_answer(self, study: Any, spec: dict, answer: dict, fields: dict) -> dict:
+        only_keys(answer, ("ratings",), "answer")
+        ratings = answer.get("ratings")
+        n = len(spec["slots"])
+        if not isinstance(ratings, list) or len(ratings) != n:
+            raise PayloadError(f"answer.ratings: expected a list of {n} ratings")
+        return {"ratings": [int_in(r, 0, 100, f"answer.ratings[{i}]") for i, r in enumerate(ratings)]}
+
+    def outcome(self, study: Any, spec: dict, data: dict) -> Outcome:
+        if not spec.get("check"):
+            return Outcome()
+        block = study.page(spec["block"]).cfg
+        slot = spec["check_slot"]
+        expected = study.manifest.by_file()[spec["slots"][slot]].expected
+        return Outcome(attention=check_passes(expected, data["ratings"][slot], block["bands"], block["tolerance"]))
+
+    def export_rows(self, study: Any, spec: dict, answer: Any, base: dict) -> list[dict]:
+        by_file = study.manifest.by_file()
+        block = study.page(spec["block"]).cfg
+        rows = []
+        for k, file in enumerate(spec["slots"]):
+            stim = by_file[file]
+            row = {**base, "question": block["question"]["id"], "condition": export_condition(stim),
+                   "position_a": k, "answer": answer.data["ratings"][k], "role": spec["roles"][k]}
+            if k == spec.get("check_slot"):
+                lo, hi = expected_interval(stim.expected, block["bands"]) or (float("nan"), float("nan"))
+                expected = str(stim.expected) if lo == hi else f"{lo:g}-{hi:g}"
+                row.update(is_attention_check=1, attention_expected=expected,
+                           attention_passed=int(bool(answer.attention_passed)))
+            rows.append(row)
+        return rows
+
+
+KIND = MushraKind()
