@@ -42,6 +42,7 @@ import warnings
 import yaml
 from tqdm import tqdm
 
+from evalsuite.contracts import manifest as manifest_contract
 from evalsuite.errors import InputError
 from evalsuite.hashing import file_sha256
 from evalsuite.parallel import run
@@ -49,9 +50,7 @@ from renderers.attention import CHECKS, DEFAULT_TEXT
 
 # Part of every input hash: bump it when a change to the renderer changes how videos look.
 RENDERER_VERSION = "evalsuite-renderers-1"
-MANIFEST_COLUMNS = ["file", "condition", "segment", "kind", "expected", "sha256", "check", "source_file",
-                    "motion_segment", "text", "appear_s", "duration_s", "n_frames", "fps", "width", "height",
-                    "input_hash"]
+MANIFEST_COLUMNS = list(manifest_contract.COLUMNS)
 DEFAULT_EXPECTED = {"instruction": "73", "distorted_audio": "bad", "distorted_video": "bad"}
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 

@@ -13,13 +13,11 @@ import csv
 import io
 import json
 
+from evalsuite.contracts import results as results_contract
 from study_app.model import Study
 from study_app.pages import get_kind
 
-COLUMNS = ["study", "participant", "platform", "session", "session_status", "page", "page_type",
-           "trial", "question", "scale", "segment", "condition", "condition_a", "condition_b",
-           "position_a", "answer", "strength", "role", "rt_ms", "is_training", "is_attention_check",
-           "attention_expected", "attention_passed", "shown_at", "answered_at", "reasons"]
+COLUMNS = list(results_contract.COLUMNS)
 
 
 def _iso(t) -> str:

@@ -5,10 +5,12 @@ import pathlib
 import re
 from dataclasses import dataclass, field
 
+from evalsuite.contracts import manifest as manifest_contract
+
 ID_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 PLATFORMS = ("prolific", "mturk", "anonymous")
-MANIFEST_REQUIRED = ("file", "condition", "segment")
-MANIFEST_KINDS = ("stimulus", "attention")
+MANIFEST_REQUIRED = manifest_contract.REQUIRED
+MANIFEST_KINDS = manifest_contract.KINDS
 
 
 @dataclass(frozen=True)

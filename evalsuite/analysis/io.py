@@ -15,20 +15,12 @@ import pathlib
 import numpy as np
 import pandas as pd
 
+from evalsuite.contracts import results as results_contract
 from evalsuite.errors import InputError
 
-RESULTS_COLUMNS = (
-    "study", "participant", "platform", "session", "session_status", "page", "page_type",
-    "trial", "question", "scale", "segment", "condition", "condition_a", "condition_b",
-    "position_a", "answer", "strength", "role", "rt_ms", "is_training", "is_attention_check",
-    "attention_expected", "attention_passed", "shown_at", "answered_at",
-)
+RESULTS_COLUMNS = results_contract.COLUMNS
 # Columns the analysis cannot do without; the others default to empty when absent.
-RESULTS_REQUIRED = (
-    "study", "participant", "session", "session_status", "page", "page_type", "question",
-    "condition", "condition_a", "condition_b", "answer", "is_training", "is_attention_check",
-    "attention_passed",
-)
+RESULTS_REQUIRED = results_contract.REQUIRED
 BATTLES_REQUIRED = ("participant", "item", "condition_a", "condition_b", "winner")
 # The GENEA Leaderboard's own export uses these names; accepted as aliases.
 BATTLES_ALIASES = {"user": "participant", "input_code": "item", "model_a": "condition_a",

@@ -13,11 +13,12 @@ import platform
 import numpy as np
 import pandas as pd
 
+from evalsuite.contracts import summary as summary_contract
 from evalsuite.metrics.engine import ScoreResult
 
 __all__ = ["SUMMARY_COLUMNS", "summary_frame", "format_table", "markdown_table", "latex_table", "write_outputs"]
 
-SUMMARY_COLUMNS = ["condition", "metric", "value", "unit", "ci_low", "ci_high", "std", "n", "better", "convention"]
+SUMMARY_COLUMNS = list(summary_contract.COLUMNS)
 _ARROW = {"lower": "lower is better", "higher": "higher is better", "closer to natural": "closer to natural"}
 _SYMBOL = {"lower": "↓", "higher": "↑", "closer to natural": "≈nat"}
 _TEX_SYMBOL = {"lower": r"$\downarrow$", "higher": r"$\uparrow$", "closer to natural": r"$\approx$nat"}

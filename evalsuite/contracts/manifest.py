@@ -1,0 +1,17 @@
+"""``manifest.csv``: the private map from blinded stimulus video names to what they show.
+
+Written by ``evalsuite render stimuli`` (:mod:`renderers.stimuli`, all of :data:`COLUMNS`), read by the study
+app (:func:`study_app.definition.load_manifest`), which needs :data:`REQUIRED` and reads the optional
+``kind``, ``expected``, ``motion_segment`` and ``block``. A hand-made manifest needs only the required ones.
+"""
+from __future__ import annotations
+
+__all__ = ["COLUMNS", "REQUIRED", "KINDS"]
+
+# In the order the renderer writes them.
+COLUMNS = ("file", "condition", "segment", "kind", "expected", "sha256", "check", "source_file",
+           "motion_segment", "text", "appear_s", "duration_s", "n_frames", "fps", "width", "height",
+           "input_hash")
+REQUIRED = ("file", "condition", "segment")
+# Row kinds: a stimulus of a condition, or an attention-check video (``expected``: the attentive answer).
+KINDS = ("stimulus", "attention")
