@@ -66,8 +66,7 @@ def timed(func, path, repeats):
         start = time.perf_counter()
         result = func(path)
         times.append(time.perf_counter() - start)
-        del result
-        result = None
+        del result  # free the motion before the next run
     return times
 
 

@@ -85,9 +85,9 @@ def main():
     args = parser.parse_args()
 
     import evalsuite
-    from evalsuite.metrics.kinematics import derivative_norms
-    from evalsuite.metrics.histograms import joint_histograms
     from evalsuite.metrics.engine import score_folders
+    from evalsuite.metrics.histograms import joint_histograms
+    from evalsuite.metrics.kinematics import derivative_norms
 
     cache = generate(args.cache)
     conds = [str(cache / f"cond{c:02d}") for c in range(N_CONDITIONS)]

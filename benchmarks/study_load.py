@@ -106,7 +106,7 @@ class Gunicorn:
                 return self
             except (urllib.error.URLError, ConnectionError, OSError):
                 if self.proc.poll() is not None:
-                    raise RuntimeError("gunicorn exited: " + self.proc.stderr.read().decode()[-2000:])
+                    raise RuntimeError("gunicorn exited: " + self.proc.stderr.read().decode()[-2000:]) from None
                 time.sleep(0.2)
         raise RuntimeError("gunicorn did not start")
 

@@ -6,10 +6,8 @@ from __future__ import annotations
 
 import pathlib
 import subprocess
-import warnings
 
 import numpy as np
-from scipy.io import wavfile
 
 from evalsuite.audio import read_wav
 from evalsuite.audio import write_wav as _write_wav

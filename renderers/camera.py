@@ -85,7 +85,7 @@ class Camera:
         v = (1.0 - ndc[..., 1]) * 0.5 * self.height
         return np.stack([u, v], axis=-1)
 
-    def with_size(self, width: int, height: int) -> "Camera":
+    def with_size(self, width: int, height: int) -> Camera:
         return Camera(self.eye, self.target, self.up, self.yfov_deg, int(width), int(height), self.znear, self.zfar)
 
     def to_dict(self) -> dict:
@@ -95,7 +95,7 @@ class Camera:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Camera":
+    def from_dict(cls, d: dict) -> Camera:
         return cls(tuple(d["eye"]), tuple(d["target"]), tuple(d["up"]), float(d["yfov_deg"]),
                    int(d["width"]), int(d["height"]), float(d["znear"]), float(d["zfar"]))
 

@@ -15,8 +15,16 @@ import numpy as np
 from evalsuite.errors import InputError
 from renderers._gl import import_pyrender, offscreen_renderer, set_samples
 from renderers.camera import FRAMINGS, UP_AXES, VIEWS, Camera, _unit, frame_points, view_direction
-from renderers.figure import (FigureMesh, FigureStyle, body_size, forward_direction, head_index,
-                              head_marker_centres, leg_mask, srgb_to_linear)
+from renderers.figure import (
+    FigureMesh,
+    FigureStyle,
+    body_size,
+    forward_direction,
+    head_index,
+    head_marker_centres,
+    leg_mask,
+    srgb_to_linear,
+)
 
 
 @dataclass(frozen=True)
@@ -64,7 +72,7 @@ class RenderSettings:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "RenderSettings":
+    def from_dict(cls, d: dict) -> RenderSettings:
         d = dict(d)
         unknown = set(d) - set(cls.__dataclass_fields__)
         if unknown:
@@ -96,7 +104,7 @@ class View:
                 "floor_centre": [float(x) for x in self.floor_centre]}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "View":
+    def from_dict(cls, d: dict) -> View:
         return cls(Camera.from_dict(d["camera"]), float(d["size"]), d["floor_height"], tuple(d["floor_centre"]))
 
 
@@ -147,9 +155,9 @@ def make_view(position_sets, names_sets, settings: RenderSettings, parents_sets=
         if settings.framing == "upper":
             pos = pos[:, _upper_mask(pos, names, up)]
         pts.append(pos.reshape(-1, 3))
-    pts = np.concatenate(pts)
+    cloud = np.concatenate(pts)
     pad = size * style.joint_radius * 1.2
-    camera = frame_points(pts, direction, settings.up_axis, settings.width, settings.height,
+    camera = frame_points(cloud, direction, settings.up_axis, settings.width, settings.height,
                           yfov_deg=settings.yfov_deg, margin=settings.margin, pad=pad)
     floor_height = None
     centre = tuple(float(x) for x in np.nanmean(np.concatenate([p.reshape(-1, 3) for p in position_sets]), axis=0))

@@ -10,8 +10,6 @@ import contextlib
 import math
 import os
 import pathlib
-import re
-import subprocess
 import tempfile
 import warnings
 
@@ -19,7 +17,7 @@ import numpy as np
 
 from evalsuite.errors import InputError
 from renderers.audio import fit_length, write_wav
-from renderers.media_probe import probe
+from renderers.media_probe import probe as probe  # public here too: renderers.video.probe
 
 
 class DurationMismatchWarning(UserWarning):

@@ -8,13 +8,12 @@ from __future__ import annotations
 
 from collections import Counter
 
-from flask import (Blueprint, Response, abort, current_app, redirect, render_template, request,
-                   session, url_for)
+from flask import Blueprint, Response, current_app, redirect, render_template, request, session, url_for
 
 from study_app.context import get_store, get_study
+from study_app.export import raw_json, result_rows, results_csv
 from study_app.pages import get_kind
 from study_app.security import admin_required, check_token
-from study_app.export import raw_json, result_rows, results_csv
 from study_app.storage import utcnow
 
 bp = Blueprint("admin", __name__)

@@ -8,10 +8,10 @@ from flask import Flask, jsonify, render_template, request
 from flask_wtf.csrf import CSRFError, CSRFProtect
 from jinja2 import ChoiceLoader, FileSystemLoader
 
+from study_app.context import install
 from study_app.definition import Study, load_study
 from study_app.design import default_plans_path, read_plans
 from study_app.errors import StudyStateError
-from study_app.context import install
 from study_app.pages import page_kinds
 from study_app.policy import Rules
 from study_app.storage import Store, init_db, make_engine
@@ -74,7 +74,8 @@ def create_app(config: dict) -> Flask:
     # plug-in page kinds may keep their templates outside the package
     folders = [k.template_folder for k in page_kinds().values() if k.template_folder]
     if folders:
-        app.jinja_loader = ChoiceLoader([app.jinja_loader, FileSystemLoader(folders)])
+        loaders = [app.jinja_loader] if app.jinja_loader is not None else []
+        app.jinja_loader = ChoiceLoader([*loaders, FileSystemLoader(folders)])
     csrf.init_app(app)
     app.context_processor(lambda: {"study": study})
 
@@ -129,7 +130,7 @@ def create_app_from_env() -> Flask:
                if not env.get(k)]
     if missing:
         raise StudyStateError(f"environment variable(s) {', '.join(missing)} not set")
-    config = {"STUDY": env["EVALSUITE_STUDY"], "SECRET_KEY": env["EVALSUITE_SECRET_KEY"],
+    config: dict[str, object] = {"STUDY": env["EVALSUITE_STUDY"], "SECRET_KEY": env["EVALSUITE_SECRET_KEY"],
               "ADMIN_TOKEN": env["EVALSUITE_ADMIN_TOKEN"], "PLANS": env.get("EVALSUITE_PLANS"),
               "DATABASE_URL": env.get("EVALSUITE_DATABASE_URL")}
     if env.get("EVALSUITE_INSECURE_COOKIES") == "1":

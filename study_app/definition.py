@@ -53,7 +53,9 @@ def load_manifest(path) -> Manifest:
             f"missing column(s) {', '.join(missing)}; expected a header with at least "
             f"{', '.join(MANIFEST_REQUIRED)}", path=path, line=1)
     root = path.parent.resolve()
-    stimuli, seen_files, seen_keys = [], {}, {}
+    stimuli: list[Stimulus] = []
+    seen_files: dict[str, int] = {}
+    seen_keys: dict[tuple, int] = {}
     for lineno, row in enumerate(reader, start=2):
         row = {(k or "").strip(): (v or "").strip() for k, v in row.items() if k is not None}
         if not any(row.values()):

@@ -34,7 +34,7 @@ def _stimuli(out_dir: pathlib.Path, target: pathlib.Path, echo) -> pathlib.Path:
 def study_definition(manifest_path: pathlib.Path, study_dir: pathlib.Path) -> dict:
     """A small pairwise + MUSHRA study over every condition of the manifest."""
     from study_app.definition import load_manifest
-    from study_app.pages import get_kind
+    from study_app.pages import get_block_kind
 
     manifest = load_manifest(manifest_path)
     stimuli = [s for s in manifest.stimuli if s.kind == "stimulus" and not s.mismatched]
@@ -53,10 +53,10 @@ def study_definition(manifest_path: pathlib.Path, study_dir: pathlib.Path) -> di
               "segments": segments, "pages": len(segments), "muted": True,
               "question": {"id": "human_likeness_rating",
                            "text": "How human-like does the gesture motion appear?"}}
-    for block, ptype in ((pairwise, "pairwise"), (mushra, "mushra")):
+    for block, ptype, n_pages in ((pairwise, "pairwise", hl_pages), (mushra, "mushra", len(segments))):
         cfg = {"levels": 3, "bands": ["Bad", "Poor", "Fair", "Good", "Excellent"], "segments": segments}
-        if get_kind(ptype).attention_pool(manifest, block["id"], cfg) and block["pages"] >= 2:
-            block["attention_checks"] = [block["pages"] - 1 if ptype == "pairwise" else 1]
+        if get_block_kind(ptype).attention_pool(manifest, str(block["id"]), cfg) and n_pages >= 2:
+            block["attention_checks"] = [n_pages - 1 if ptype == "pairwise" else 1]
     return {
         "id": "evalsuite-demo",
         "title": "Gesture study (evalsuite demo)",

@@ -32,7 +32,7 @@ from collections import Counter
 
 from study_app.errors import StudyDefinitionError
 from study_app.model import Study
-from study_app.pages import get_kind
+from study_app.pages import get_block_kind, get_kind
 
 PLANS_FORMAT = "evalsuite-study-plans/1"
 
@@ -56,7 +56,8 @@ def williams_rows(n: int) -> list[list[int]]:
 
 class _Lookup:
     def __init__(self, study: Study):
-        self.matched, self.mismatched = {}, {}
+        self.matched: dict[tuple[str, str], str] = {}
+        self.mismatched: dict[tuple[str, str], str] = {}
         for s in study.manifest.stimuli:
             if s.kind != "stimulus":
                 continue
@@ -73,24 +74,24 @@ class _PlanBuilder:
     def __init__(self, study: Study):
         self.study = study
         self.lookup = _Lookup(study)
-        self.kind = get_kind
+        self.kind = get_block_kind
 
 
 def build_plans(study: Study) -> dict:
     """Session plans for ``study`` as a JSON-serialisable dict (see module docstring)."""
     builder = _PlanBuilder(study)
     blocks = study.blocks
-    kinds = {bid: get_kind(b.type) for bid, b in blocks.items()}
+    kinds = {bid: get_block_kind(b.type) for bid, b in blocks.items()}
     pools = {bid: kinds[bid].attention_pool(study.manifest, bid, b.cfg) for bid, b in blocks.items()}
     check_counter: Counter = Counter()
     plans = []
     for s in range(study.sessions):
         pages = []
         for page in study.pages:
-            kind = get_kind(page.type)
-            if not kind.block:
-                pages.extend(kind.plan_pages(page, s, builder))
+            if not get_kind(page.type).block:
+                pages.extend(get_kind(page.type).plan_pages(page, s, builder))
                 continue
+            kind = kinds[page.id]
             k = page.cfg["pages"]
             regular = [kind.regular_page(page, s * k + j, builder.lookup, page.cfg["segments"]) for j in range(k)]
             rows = williams_rows(k)
@@ -147,8 +148,7 @@ def balance_report(plans: dict, study: Study) -> dict:
     counts: dict = {"pairs": Counter(), "mushra_slots": Counter()}
     for plan in plans["plans"]:
         for p in plan["pages"]:
-            kind = get_kind(p["type"])
-            if p.get("training") or not kind.block:
+            if p.get("training") or not get_kind(p["type"]).block:
                 continue
-            kind.balance(p, by_file, counts)
+            get_block_kind(p["type"]).balance(p, by_file, counts)
     return counts

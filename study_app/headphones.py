@@ -40,7 +40,7 @@ def correct_choice(order: int) -> int:
 def trial_orders(n_trials: int, rng) -> list[int]:
     """``n_trials`` order indices: the six orders shuffled, then again, so the quiet tone is in
     each position equally often over every six trials."""
-    out = []
+    out: list = []
     while len(out) < n_trials:
         block = list(range(len(ORDERS)))
         rng.shuffle(block)

@@ -11,8 +11,7 @@ import secrets
 import urllib.parse
 from functools import partial
 
-from flask import (Blueprint, abort, jsonify, redirect, render_template, request,
-                   session, url_for)
+from flask import Blueprint, abort, jsonify, redirect, render_template, request, session, url_for
 
 from study_app.answers import n_slots, parse_events, parse_token
 from study_app.context import get_store, get_study
@@ -197,6 +196,8 @@ def answer(sid, index):
         status, ans, sess = store.submit(sid, index, token, partial(validate_submission, study, index, body))
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
+    if status == "missing":
+        return jsonify(error="this session does not exist (any more); open the study link again"), 404
     nxt = url_for("participant.page", sid=sid)
     if status == "conflict":
         return jsonify(error="this page was already answered; the stored answer is kept",

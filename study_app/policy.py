@@ -53,16 +53,17 @@ def after_answer(state: SessionState, outcome: Outcome, pages: list[dict], rules
     passed = state.passed_checks + (outcome.attention is True)
     failed = state.failed_checks + (outcome.attention is False)
     nxt = state.current_page + 1
-    base = dict(current_page=nxt, passed_checks=passed, failed_checks=failed, honeypot=outcome.honeypot)
+    status, reason = "active", None
     if outcome.honeypot:
-        return Transition(**base, status="failed", end_reason="honeypot")
-    if outcome.end_reason:
-        return Transition(**base, status="failed", end_reason=outcome.end_reason)
-    if failed >= rules.max_failed_attention_checks:
-        return Transition(**base, status="failed", end_reason="attention_checks")
-    if nxt < len(pages) and get_kind(pages[nxt]["type"]).position == "last":
-        return Transition(**base, status="finished", end_reason="completed")
-    return Transition(**base)
+        status, reason = "failed", "honeypot"
+    elif outcome.end_reason:
+        status, reason = "failed", outcome.end_reason
+    elif failed >= rules.max_failed_attention_checks:
+        status, reason = "failed", "attention_checks"
+    elif nxt < len(pages) and get_kind(pages[nxt]["type"]).position == "last":
+        status, reason = "finished", "completed"
+    return Transition(current_page=nxt, passed_checks=passed, failed_checks=failed, status=status,
+                      end_reason=reason, honeypot=outcome.honeypot)
 
 
 def plan_after_end(status: str, rules: Rules) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import hashlib
 import pathlib
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -19,8 +20,8 @@ def _text_image(text: str, width: int, height: int) -> np.ndarray:
     """White-on-black text rendered with matplotlib (Agg), as a (H, W) float mask in 0..1."""
     import matplotlib
     matplotlib.use("Agg")
-    from matplotlib.figure import Figure
     from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     fig = Figure(figsize=(width / 100, height / 100), dpi=100)
     canvas = FigureCanvasAgg(fig)
@@ -81,7 +82,7 @@ def blinded_name(*parts) -> str:
 
 
 def make_sample_stimuli(folder, conditions, segments, *, mismatched=False,
-                        attention: list[tuple[str, str]] = (), seconds: float = 1.0, fps: int = 10,
+                        attention: Sequence[tuple[str, str]] = (), seconds: float = 1.0, fps: int = 10,
                         salt: str = "evalsuite") -> pathlib.Path:
     """Write clips and ``manifest.csv`` into ``folder``; returns the manifest path.
 

@@ -2,6 +2,8 @@
 expected (:class:`~study_app.errors.StudyDefinitionError`)."""
 from __future__ import annotations
 
+from typing import NoReturn
+
 from study_app.errors import StudyDefinitionError
 from study_app.model import ID_RE
 
@@ -14,7 +16,7 @@ class Checker:
     def __init__(self, path):
         self.path = path
 
-    def fail(self, field_path: str, message: str):
+    def fail(self, field_path: str, message: str) -> NoReturn:
         raise StudyDefinitionError(message, path=self.path, field=field_path)
 
     def get(self, obj: dict, key: str, where: str, types, *, required=False, default=None,

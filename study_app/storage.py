@@ -16,8 +16,20 @@ import datetime as dt
 import secrets
 import time
 
-from sqlalchemy import (JSON, Boolean, DateTime, Float, ForeignKey, Integer, String, Text,
-                        UniqueConstraint, create_engine, event, select)
+from sqlalchemy import (
+    JSON,
+    Boolean,
+    DateTime,
+    Float,
+    ForeignKey,
+    Integer,
+    String,
+    Text,
+    UniqueConstraint,
+    create_engine,
+    event,
+    select,
+)
 from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
@@ -185,6 +197,14 @@ def init_db(engine, study, plans: dict):
             time.sleep(0.2 * (attempt + 1))
 
 
+def _plan(db, sess: ParticipantSession) -> Plan:
+    """The plan a session holds (every session is created with one)."""
+    plan = db.get(Plan, sess.plan_id)
+    if plan is None:
+        raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
+    return plan
+
+
 class Store:
     """All database operations of the app; each method is one transaction."""
 
@@ -224,7 +244,7 @@ class Store:
         """
         now = utcnow()
         until = now + dt.timedelta(minutes=study.reservation_minutes)
-        for attempt in range(3):
+        for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
                     existing = db.scalars(select(ParticipantSession).where(
@@ -269,7 +289,7 @@ class Store:
             if sess is None:
                 return None, None
             self._check_expiry(db, sess, now)
-            return sess, db.get(Plan, sess.plan_id).pages
+            return sess, _plan(db, sess).pages
 
     def read_session(self, session_id: str):
         """(session, plan pages) without touching reservations (read-only, no lock)."""
@@ -277,7 +297,7 @@ class Store:
             sess = db.get(ParticipantSession, session_id)
             if sess is None:
                 return None, None
-            return sess, db.get(Plan, sess.plan_id).pages
+            return sess, _plan(db, sess).pages
 
     def view_current_page(self, session_id: str):
         """One transaction for a page view: the session, its plan, the current page's first-view
@@ -289,8 +309,9 @@ class Store:
             if sess is None:
                 return None
             self._check_expiry(db, sess, now)
-            pages = db.get(Plan, sess.plan_id).pages
-            view, played = None, {"play": set(), "ended": set()}
+            pages = _plan(db, sess).pages
+            view = None
+            played: dict[str, set] = {"play": set(), "ended": set()}
             if sess.status == "active":
                 index = sess.current_page
                 view = db.scalars(select(PageView).where(PageView.session_id == session_id,
@@ -332,7 +353,7 @@ class Store:
                          client_ms=e.get("ms"), detail=e.get("detail", "")))
 
     def log_events(self, session_id: str, page_index: int, events: list[dict]):
-        for attempt in range(3):
+        for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
                     self.add_events(db, session_id, page_index, events)
@@ -362,6 +383,8 @@ class Store:
                     # waited for the lock then sees the committed first answer.
                     sess = db.scalars(self._locked(select(ParticipantSession).where(
                         ParticipantSession.id == session_id))).first()
+                    if sess is None:
+                        return "missing", None, None
                     prior = db.scalars(select(Answer).where(Answer.submit_token == token)).first()
                     if prior is not None:
                         if prior.session_id != session_id or prior.page_index != page_index:
@@ -371,7 +394,7 @@ class Store:
                     self._check_expiry(db, sess, now)
                     if sess.status != "active" or sess.current_page != page_index:
                         return "conflict", None, sess
-                    plan = db.get(Plan, sess.plan_id)
+                    plan = _plan(db, sess)
                     sub = validate(plan.pages, lambda kind: self.slots_with(db, session_id, page_index, kind))
                     self.add_events(db, session_id, page_index, sub.events)
                     view = db.scalars(select(PageView).where(PageView.session_id == session_id,

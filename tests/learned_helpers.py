@@ -11,7 +11,7 @@ FPS = 30.0
 WINDOW = 20
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def natural(n_pieces: int = 8, seconds: float = 20.0, seed: int = 3) -> dict:
     """``n_pieces`` consecutive pieces of one long synthetic take (one motion 'style'), by name.
 
@@ -22,7 +22,7 @@ def natural(n_pieces: int = 8, seconds: float = 20.0, seed: int = 3) -> dict:
     return {f"take{i:02d}": cut(take, i * seconds, (i + 1) * seconds) for i in range(n_pieces)}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def trained(seed: int = 0, epochs: int = 6):
     from evalsuite.learned.training import train_model
 

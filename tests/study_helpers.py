@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pathlib
+
 from study_app.context import store_of, study_of
 
 CONDITIONS = ["SYSALPHA", "SYSBETA", "NATURALGT"]

@@ -37,7 +37,8 @@ def test_attention_rule_default_two_and_any():
     df = frame(session("P1", "S1", failed_checks=1, passed_checks=1), session("P2", "S2", failed_checks=2),
                session("P3", "S3", passed_checks=2))
     r = apply_exclusions(df)
-    assert list(r.table["session"]) == ["S2"] and r.table["reason"].iloc[0] == "attention_checks"
+    assert list(r.table["session"]) == ["S2"]
+    assert r.table["reason"].iloc[0] == "attention_checks"
     assert "failed 2 of 2" in r.table["detail"].iloc[0]
     strict = apply_exclusions(df, attention_fails=1)
     assert list(strict.table["session"]) == ["S1", "S2"]
@@ -46,9 +47,12 @@ def test_attention_rule_default_two_and_any():
 def test_training_and_check_rows_removed_not_people():
     df = frame(session("P1", "S1", n=4, training=2, passed_checks=2))
     r = apply_exclusions(df)
-    assert r.table.empty and len(r.data) == 4
-    assert (r.data["is_training"] == 0).all() and (r.data["is_attention_check"] == 0).all()
-    assert r.summary["training_rows_removed"] == 2 and r.summary["attention_check_rows_removed"] == 2
+    assert r.table.empty
+    assert len(r.data) == 4
+    assert (r.data["is_training"] == 0).all()
+    assert (r.data["is_attention_check"] == 0).all()
+    assert r.summary["training_rows_removed"] == 2
+    assert r.summary["attention_check_rows_removed"] == 2
 
 
 def test_incomplete_and_failed_sessions():
@@ -56,7 +60,8 @@ def test_incomplete_and_failed_sessions():
     r = apply_exclusions(df)
     assert dict(zip(r.table["session"], r.table["reason"])) == {"S2": "session_incomplete", "S3": "session_failed"}
     keep = apply_exclusions(df, keep_incomplete=True)
-    assert list(keep.table["session"]) == ["S3"] and set(keep.data["session"]) == {"S1", "S2"}
+    assert list(keep.table["session"]) == ["S3"]
+    assert set(keep.data["session"]) == {"S1", "S2"}
 
 
 def test_duplicate_participant_keep_first_by_time_or_drop_all():
@@ -64,7 +69,8 @@ def test_duplicate_participant_keep_first_by_time_or_drop_all():
                session("P1", "S_early", shown_at="2026-01-01T10:00:00Z"),
                session("P2", "S2", shown_at="2026-01-01T11:00:00Z"))
     r = apply_exclusions(df)
-    assert list(r.table["session"]) == ["S_late"] and r.table["reason"].iloc[0] == "duplicate_participant"
+    assert list(r.table["session"]) == ["S_late"]
+    assert r.table["reason"].iloc[0] == "duplicate_participant"
     assert "'S_early'" in r.table["detail"].iloc[0]
     allx = apply_exclusions(df, duplicates="drop-all")
     assert set(allx.table["session"]) == {"S_late", "S_early"}
@@ -89,11 +95,13 @@ def test_bs1534_post_screening_counts_items_not_single_ratings():
     df = frame(mushra_session("A", ok_one_low), mushra_session("B", bad_two_low),
                mushra_session("C", exactly_15), mushra_session("D", boundary_90))
     s = mushra_post_screening(df).set_index("participant")
-    assert s.loc["B", "excluded"] and not s.loc[["A", "C", "D"], "excluded"].any()
+    assert s.loc["B", "excluded"]
+    assert not s.loc[["A", "C", "D"], "excluded"].any()
     assert (s.loc["B", "n_low"], s.loc["B", "n_items"]) == (2, 10)
     r = apply_exclusions(df)
     # pymushra drops everyone with any low reference rating (A, B and C); the rule drops only B.
-    assert list(r.table["participant"]) == ["B"] and r.table["reason"].iloc[0] == "mushra_post_screening"
+    assert list(r.table["participant"]) == ["B"]
+    assert r.table["reason"].iloc[0] == "mushra_post_screening"
     assert "2 of 10 items" in r.table["detail"].iloc[0]
     off = apply_exclusions(df, mushra_screening=False)
     assert off.table.empty
@@ -102,7 +110,8 @@ def test_bs1534_post_screening_counts_items_not_single_ratings():
 def test_everyone_excluded_leaves_empty_data():
     df = frame(session("P1", "S1", status="failed"))
     r = apply_exclusions(df)
-    assert r.data.empty and r.summary["sessions_included"] == 0
+    assert r.data.empty
+    assert r.summary["sessions_included"] == 0
 
 
 def test_bad_options():

@@ -38,9 +38,12 @@ def err(tmp_path, lines, **kw):
 
 def test_good_file_reads_with_lines_and_values(tmp_path):
     df = read_results(write(tmp_path, GOOD))
-    assert len(df) == 6 and list(df["line"]) == [2, 3, 4, 5, 6, 7]
-    assert df.loc[3, "value"] == 62.5 and pd.isna(df.loc[0, "value"])
-    assert df.attrs["study"] == "s1" and detect_format(write(tmp_path, GOOD)) == "results"
+    assert len(df) == 6
+    assert list(df["line"]) == [2, 3, 4, 5, 6, 7]
+    assert df.loc[3, "value"] == 62.5
+    assert pd.isna(df.loc[0, "value"])
+    assert df.attrs["study"] == "s1"
+    assert detect_format(write(tmp_path, GOOD)) == "results"
 
 
 def test_extra_columns_ignored_and_na_stays_a_name(tmp_path):
@@ -53,7 +56,8 @@ def test_missing_column(tmp_path):
     header = HEADER.replace(",answer,", ",")
     lines = [",".join(c for i, c in enumerate(g.split(",")) if i != HEADER.split(",").index("answer")) for g in GOOD]
     e = err(tmp_path, lines, header=header)
-    assert e.line == 1 and "missing required column(s): answer" in str(e)
+    assert e.line == 1
+    assert "missing required column(s): answer" in str(e)
 
 
 def test_unknown_pairwise_answer_names_row_column_value(tmp_path):
@@ -61,7 +65,9 @@ def test_unknown_pairwise_answer_names_row_column_value(tmp_path):
     lines[0] = replace(lines[0], "answer", "left")
     e = err(tmp_path, lines)
     assert (e.line, e.field) == (2, "answer")
-    assert "'left'" in str(e) and "'a', 'b', 'tie'" in str(e) and "results.csv:2: answer:" in str(e)
+    assert "'left'" in str(e)
+    assert "'a', 'b', 'tie'" in str(e)
+    assert "results.csv:2: answer:" in str(e)
 
 
 @pytest.mark.parametrize("row,col,value,expect", [
@@ -85,7 +91,9 @@ def test_bad_values(tmp_path, row, col, value, expect):
     lines = GOOD.copy()
     lines[row] = replace(lines[row], col, value)
     e = err(tmp_path, lines)
-    assert e.line == row + 2 and e.field == col and expect in str(e)
+    assert e.line == row + 2
+    assert e.field == col
+    assert expect in str(e)
     if value:
         assert repr(value) in str(e)
 
@@ -100,7 +108,10 @@ def test_tie_with_strength(tmp_path):
 def test_mixed_studies_and_study_selection(tmp_path):
     lines = GOOD + [replace(GOOD[0], "study", "s2").replace("S1", "S9")]
     e = err(tmp_path, lines)
-    assert e.line == 8 and e.field == "study" and "mixed studies" in str(e) and "--study" in str(e)
+    assert e.line == 8
+    assert e.field == "study"
+    assert "mixed studies" in str(e)
+    assert "--study" in str(e)
     df = read_results(write(tmp_path, lines), study="s2")
     assert list(df["line"]) == [8]
     with pytest.raises(InputError, match="study 'nope' not in the file"):
@@ -111,7 +122,8 @@ def test_session_shared_by_two_participants(tmp_path):
     lines = GOOD.copy()
     lines[3] = replace(lines[3], "participant", "P2")
     e = err(tmp_path, lines)
-    assert (e.line, e.field) == (5, "participant") and "'S1'" in str(e)
+    assert (e.line, e.field) == (5, "participant")
+    assert "'S1'" in str(e)
 
 
 def test_attention_check_without_outcome(tmp_path):
@@ -154,19 +166,23 @@ def test_battles_detected_and_converted(tmp_path):
               header=BATTLE_HEADER, name="battles.csv")
     assert detect_format(p) == "battles"
     df = read_any(p)
-    assert set(df["page_type"]) == {"pairwise"} and set(df["question"]) == {"preference"}
-    assert list(df["answer"]) == ["a", "tie", "b"] and list(df["strength"]) == ["strong", "", "weak"]
+    assert set(df["page_type"]) == {"pairwise"}
+    assert set(df["question"]) == {"preference"}
+    assert list(df["answer"]) == ["a", "tie", "b"]
+    assert list(df["strength"]) == ["strong", "", "weak"]
 
 
 def test_battles_leaderboard_aliases(tmp_path):
     p = write(tmp_path, ["u1,c1,A,B,model_a,True", "u1,c2,A,B,tie,False", "u2,c1,A,B,model_b,False"],
               header="user,input_code,model_a,model_b,winner,is_strong", name="lb.csv")
     df = read_battles(p)
-    assert list(df["answer"]) == ["a", "tie", "b"] and list(df["strength"]) == ["strong", "", "weak"]
+    assert list(df["answer"]) == ["a", "tie", "b"]
+    assert list(df["strength"]) == ["strong", "", "weak"]
 
 
 def test_battles_bad_winner(tmp_path):
     p = write(tmp_path, ["u1,clip1,A,B,a,", "u1,clip2,A,B,draw,"], header=BATTLE_HEADER, name="b.csv")
     with pytest.raises(InputError) as info:
         read_any(p)
-    assert (info.value.line, info.value.field) == (3, "winner") and "'draw'" in str(info.value)
+    assert (info.value.line, info.value.field) == (3, "winner")
+    assert "'draw'" in str(info.value)

@@ -51,21 +51,24 @@ def test_anova_rm_anova_and_t_tests_by_hand():
     df_b, df_w = 2, len(y) - 3
     F = (ss_b / df_b) / (ss_w / df_w)
     ow = t["anova"].set_index("test").loc["one-way ANOVA"]
-    assert ow.F == pytest.approx(F) and ow.p_value == pytest.approx(stats.f.sf(F, df_b, df_w))
+    assert pytest.approx(F) == ow.F
+    assert ow.p_value == pytest.approx(stats.f.sf(F, df_b, df_w))
     # Repeated-measures ANOVA.
     subj = y.groupby("p")["y"].mean()
     ss_s = 3 * ((subj - grand) ** 2).sum()
     ss_e = ((y["y"] - grand) ** 2).sum() - ss_b - ss_s
     F_rm = (ss_b / 2) / (ss_e / (2 * 7))
     rm = t["anova"].set_index("test").loc["repeated-measures ANOVA"]
-    assert rm.F == pytest.approx(F_rm) and rm.p_value == pytest.approx(stats.f.sf(F_rm, 2, 14))
+    assert pytest.approx(F_rm) == rm.F
+    assert rm.p_value == pytest.approx(stats.f.sf(F_rm, 2, 14))
     # Paired t with Bonferroni over the 3 pairs.
     w = y.pivot(index="p", columns="c", values="y")
     d = w["A"] - w["C"]
     tt = d.mean() / (d.std(ddof=1) / math.sqrt(len(d)))
     p = 2 * stats.t.sf(abs(tt), len(d) - 1)
     ph = t["posthoc"].set_index(["condition_1", "condition_2", "test"]).loc[("A", "C", "paired t")]
-    assert ph.t == pytest.approx(tt) and ph.p_value == pytest.approx(p)
+    assert ph.t == pytest.approx(tt)
+    assert ph.p_value == pytest.approx(p)
     assert ph.p_bonferroni == pytest.approx(min(1, 3 * p))
     # Means with t CIs of participant scores.
     m = t["means"].set_index("condition").loc["B"]
@@ -81,5 +84,7 @@ def test_single_participant_gives_notes_not_crashes():
     t = likert_tables(make_likert({("p0", "A"): [4, 5], ("p0", "B"): [2, 3]}))
     assert "a single participant" in t["means"]["note"].iloc[0]
     notes = " ".join(t["anova"]["note"])
-    assert "too few participants" in notes and ">= 2 participants" in notes
-    assert t["posthoc"]["p_value"].isna().all() and (t["posthoc"]["note"] != "").all()
+    assert "too few participants" in notes
+    assert ">= 2 participants" in notes
+    assert t["posthoc"]["p_value"].isna().all()
+    assert (t["posthoc"]["note"] != "").all()

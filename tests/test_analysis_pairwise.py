@@ -6,8 +6,16 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from evalsuite.analysis.pairwise import (binomial_p, barnard_p, holm, mismatch_tables, pairwise_counts,
-                                         pairwise_table, preference_ci, tie_adjusted)
+from evalsuite.analysis.pairwise import (
+    barnard_p,
+    binomial_p,
+    holm,
+    mismatch_tables,
+    pairwise_counts,
+    pairwise_table,
+    preference_ci,
+    tie_adjusted,
+)
 
 
 def exact_binom_two_sided(k, n):
@@ -67,10 +75,12 @@ def test_tie_policies():
     assert tie_adjusted(7, 2, 3, "split") == (8, 12, pytest.approx(8 / 12))
     assert tie_adjusted(2, 7, 3, "split") == (4, 12, pytest.approx(4 / 12))
     k, n, pref = tie_adjusted(7, 2, 3, "half")
-    assert (k, n) == (8, 12) and pref == pytest.approx(8.5 / 12)
+    assert (k, n) == (8, 12)
+    assert pref == pytest.approx(8.5 / 12)
     assert tie_adjusted(0, 0, 4, "split") == (2, 4, 0.5)
     k, n, pref = tie_adjusted(0, 0, 4, "exclude")
-    assert (k, n) == (0, 0) and math.isnan(pref)
+    assert (k, n) == (0, 0)
+    assert math.isnan(pref)
 
 
 def test_holm_matches_step_down_by_hand_and_is_not_holm_sidak():
@@ -79,7 +89,9 @@ def test_holm_matches_step_down_by_hand_and_is_not_holm_sidak():
     # Holm-Sidak (statsmodels' default) would give 1 - (1 - 0.01)^3 for the smallest of three.
     assert holm([0.01, 0.02, 0.03])[0] == pytest.approx(0.03)
     out = holm([0.01, float("nan"), 0.03])
-    assert out[0] == pytest.approx(0.02) and math.isnan(out[1]) and out[2] == pytest.approx(0.03)
+    assert out[0] == pytest.approx(0.02)
+    assert math.isnan(out[1])
+    assert out[2] == pytest.approx(0.03)
 
 
 def test_counts_reorient_and_flip_answers():
@@ -102,12 +114,17 @@ def test_pairwise_table_against_hand_computation_with_ties_empty_and_all_ties():
     assert (ab.n_a, ab.n_b, ab.n_tie) == (9, 2, 3)
     assert ab.pref_a == pytest.approx(9 / 11)
     p_ab, p_ac = exact_binom_two_sided(9, 11), exact_binom_two_sided(4, 8)
-    assert ab.p_value == pytest.approx(p_ab) and ac.p_value == pytest.approx(p_ac) == 1.0
+    assert ab.p_value == pytest.approx(p_ab)
+    assert ac.p_value == pytest.approx(p_ac) == 1.0
     # Family = the two testable comparisons only.
     assert [ab.p_holm, ac.p_holm] == pytest.approx(holm_by_hand([p_ab, p_ac]))
-    assert math.isnan(bc.p_value) and math.isnan(bc.p_holm) and math.isnan(bc.pref_a)
+    assert math.isnan(bc.p_value)
+    assert math.isnan(bc.p_holm)
+    assert math.isnan(bc.pref_a)
     assert "all 5 judgements are ties" in bc.note
-    assert (ad.n_a, ad.n_b, ad.n_tie) == (0, 0, 0) and "no judgements" in ad.note and math.isnan(ad.p_value)
+    assert (ad.n_a, ad.n_b, ad.n_tie) == (0, 0, 0)
+    assert "no judgements" in ad.note
+    assert math.isnan(ad.p_value)
     assert ab.cohens_h == pytest.approx(2 * math.asin(math.sqrt(9 / 11)) - 2 * math.asin(math.sqrt(0.5)))
 
     split = pairwise_table(df, tie_policy="split").set_index(["condition_a", "condition_b"])
@@ -133,14 +150,17 @@ def test_five_level_mean_score_and_strength_counts():
     df = rows([("A", "B", "a", "strong"), ("A", "B", "a", "weak"), ("B", "A", "a", "strong"),
                ("A", "B", "tie", "")])
     t = pairwise_table(df).iloc[0]
-    assert t.levels == 5 and t.n_a_strong == 1 and t.n_b_strong == 1
+    assert t.levels == 5
+    assert t.n_a_strong == 1
+    assert t.n_b_strong == 1
     assert t.mean_score == pytest.approx((2 + 1 - 2 + 0) / 4)
 
 
 def test_single_participant():
     df = rows([("A", "B", "a", "")] * 6, participant_of=lambda i: "only")
     t = pairwise_table(df).iloc[0]
-    assert t.n_participants == 1 and t.p_value == pytest.approx(2 / 2 ** 6)
+    assert t.n_participants == 1
+    assert t.p_value == pytest.approx(2 / 2 ** 6)
 
 
 def barnard_by_enumeration(x1, n1, x2, n2, grid=2001):

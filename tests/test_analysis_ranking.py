@@ -47,7 +47,8 @@ def test_weights_strong_weak_tie():
                   ("p2", "A", "B", "tie", "", 1)])
     parts, W = win_matrices(df, ["A", "B"])
     assert parts == ["p1", "p2"]
-    assert W[0].tolist() == [[0, 4], [2, 0]] and W[1].tolist() == [[0, 1], [1, 0]]
+    assert W[0].tolist() == [[0, 4], [2, 0]]
+    assert W[1].tolist() == [[0, 1], [1, 0]]
 
 
 def test_bootstrap_resamples_participants_seeded():
@@ -57,15 +58,19 @@ def test_bootstrap_resamples_participants_seeded():
     t2 = elo_table(df, n_boot=400, seed=7).set_index("condition")
     pd.testing.assert_frame_equal(t1, t2)
     a = t1.loc["A"]
-    assert a.elo == pytest.approx(1000) and a.ci_low < 900 and a.ci_high > 1100
+    assert a.elo == pytest.approx(1000)
+    assert a.ci_low < 900
+    assert a.ci_high > 1100
 
 
 def test_single_participant_and_disconnected_graph_notes():
     one = elo_table(battles([("p1", "A", "B", "a", "", 3), ("p1", "A", "B", "b", "", 1)]), n_boot=100)
-    assert one["note"].str.contains("single participant").all() and one["elo"].notna().all()
+    assert one["note"].str.contains("single participant").all()
+    assert one["elo"].notna().all()
     assert one["ci_low"].isna().all()
     disc = elo_table(battles([("p1", "A", "B", "a", "", 3), ("p2", "C", "D", "a", "", 3)]), n_boot=10)
-    assert disc["note"].str.contains("not connected").all() and disc["elo"].isna().all()
+    assert disc["note"].str.contains("not connected").all()
+    assert disc["elo"].isna().all()
 
 
 def test_never_winning_condition_stays_finite():

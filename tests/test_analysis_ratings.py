@@ -7,8 +7,14 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from evalsuite.analysis.ratings import (mean_ci, median_ci, rank_biserial, rating_summary, significance_matrix,
-                                        wilcoxon_pairs)
+from evalsuite.analysis.ratings import (
+    mean_ci,
+    median_ci,
+    rank_biserial,
+    rating_summary,
+    significance_matrix,
+    wilcoxon_pairs,
+)
 
 
 def exact_signed_rank_p(t, n):
@@ -40,20 +46,26 @@ def test_table_value_n10_critical_T_is_8():
     assert exact_signed_rank_p(8, 10) <= 0.05 < exact_signed_rank_p(9, 10)
     at8 = wilcoxon_pairs(designed({8})).iloc[0]
     at9 = wilcoxon_pairs(designed({9})).iloc[0]
-    assert at8.statistic == 8 and at9.statistic == 9
-    assert at8.p_value == pytest.approx(exact_signed_rank_p(8, 10)) and at8.p_value <= 0.05
-    assert at9.p_value == pytest.approx(exact_signed_rank_p(9, 10)) and at9.p_value > 0.05
+    assert at8.statistic == 8
+    assert at9.statistic == 9
+    assert at8.p_value == pytest.approx(exact_signed_rank_p(8, 10))
+    assert at8.p_value <= 0.05
+    assert at9.p_value == pytest.approx(exact_signed_rank_p(9, 10))
+    assert at9.p_value > 0.05
     assert at8.p_value == pytest.approx(2 * 25 / 1024)
 
 
 def test_zero_differences_wilcox_drops_them_and_says_so():
     base = wilcoxon_pairs(designed({8})).iloc[0]
     with_zeros = wilcoxon_pairs(designed({8}, zeros=3)).iloc[0]
-    assert with_zeros.n_pages == 13 and with_zeros.n_zero == 3
+    assert with_zeros.n_pages == 13
+    assert with_zeros.n_zero == 3
     assert with_zeros.p_value == pytest.approx(base.p_value)
     assert "3 zero difference(s) dropped" in with_zeros.note
     pratt = wilcoxon_pairs(designed({8}, zeros=3), zero_method="pratt").iloc[0]
-    assert pratt.note == "" and np.isfinite(pratt.p_value) and pratt.p_value != pytest.approx(base.p_value)
+    assert pratt.note == ""
+    assert np.isfinite(pratt.p_value)
+    assert pratt.p_value != pytest.approx(base.p_value)
 
 
 def test_no_cooccurrence_and_all_equal_give_messages_not_nan_tests():
@@ -62,7 +74,8 @@ def test_no_cooccurrence_and_all_equal_give_messages_not_nan_tests():
     t = wilcoxon_pairs(df).set_index(["condition_1", "condition_2"])
     assert "never appear on the same page" in t.loc[("X", "Z"), "note"]
     assert "all 2 paired ratings are equal" in t.loc[("X", "Y"), "note"]
-    assert t["p_holm"].isna().all() and not t["significant"].any()
+    assert t["p_holm"].isna().all()
+    assert not t["significant"].any()
 
 
 def test_holm_and_direction_in_significance_matrix():
@@ -81,7 +94,8 @@ def test_holm_and_direction_in_significance_matrix():
         expect[i] = running
     assert list(t["p_holm"]) == pytest.approx(list(expect))
     mat = significance_matrix(t, "q", ["Good", "Mid", "Bad"])
-    assert mat.loc["Good", "Bad"] == 1 and mat.loc["Bad", "Good"] == -1
+    assert mat.loc["Good", "Bad"] == 1
+    assert mat.loc["Bad", "Good"] == -1
     assert math.isnan(mat.loc["Good", "Good"])
 
 
@@ -89,7 +103,8 @@ def test_median_ci_order_statistics_by_hand():
     x = np.array([7, 3, 10, 1, 5, 9, 2, 8, 6, 4], float)
     # n = 10: P(B <= 1) = 11/1024 <= .025 < P(B <= 2) = 56/1024, so j = 2: [x_(2), x_(9)].
     lo, hi, cov = median_ci(x)
-    assert (lo, hi) == (2, 9) and cov == pytest.approx(1 - 2 * 11 / 1024)
+    assert (lo, hi) == (2, 9)
+    assert cov == pytest.approx(1 - 2 * 11 / 1024)
     assert all(math.isnan(v) for v in median_ci(x[:5]))
 
 
@@ -103,7 +118,8 @@ def test_mean_ci_by_formula_and_single_value():
 def test_rating_summary_small_and_single_participant():
     df = mushra([("s1", "p1", "X", 40), ("s1", "p2", "X", 60), ("s1", "p1", "Y", 90)])
     t = rating_summary(df).set_index("condition")
-    assert t.loc["X", "median"] == 50 and t.loc["X", "n_participants"] == 1
+    assert t.loc["X", "median"] == 50
+    assert t.loc["X", "n_participants"] == 1
     assert "too few ratings" in t.loc["X", "note"]
     assert "a single rating" in t.loc["Y", "note"]
 

@@ -13,7 +13,12 @@ import pytest
 
 from evalsuite.errors import InputError
 from evalsuite.generators.aud2repr2pose_demo.model import (
-    POINT_NAMES, POINT_PARENTS, Aud2Repr2PoseDemo, DemoModelError, hard_sigmoid_keras2)
+    POINT_NAMES,
+    POINT_PARENTS,
+    Aud2Repr2PoseDemo,
+    DemoModelError,
+    hard_sigmoid_keras2,
+)
 from evalsuite.generators.aud2repr2pose_demo.tf1_checkpoint import CheckpointError, read_tf1_checkpoint
 
 SHARED = pathlib.Path(__file__).resolve().parents[1].parent / "shared"

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from learned_helpers import FPS, WINDOW, natural, trained
 from scipy import linalg
 
 from evalsuite.errors import InputError
@@ -12,8 +13,6 @@ from evalsuite.learned.fgd import ROW_KEYS, bootstrap_fd, raw_frechet_distance, 
 from evalsuite.metrics.frechet import frechet_distance_samples
 from evalsuite.motion import Motion
 from evalsuite.motion.ops import resample
-
-from learned_helpers import FPS, WINDOW, natural, trained
 
 
 def _sqrtm_fd(x, y):
@@ -85,7 +84,8 @@ def test_score_fgd_rows_follow_the_contract_and_count_windows():
     per_seq = (int(20 * FPS) - WINDOW) // (WINDOW // 2) + 1  # complete windows of a 20 s piece
     for r in rows:
         assert tuple(r) == ROW_KEYS
-        assert r["model_hash"] == model.content_hash and r["window"] == WINDOW
+        assert r["model_hash"] == model.content_hash
+        assert r["window"] == WINDOW
         assert r["n_windows_reference"] == r["n_windows_condition"] == 4 * per_seq
         assert r["value"] >= 0
     fgd = {r["condition"]: r for r in rows if r["metric"] == "fgd"}

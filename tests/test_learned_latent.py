@@ -3,13 +3,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from learned_helpers import natural, trained
 from scipy.spatial.distance import pdist
 
 from evalsuite.errors import InputError
-from evalsuite.learned.latent import (code_histogram, fit_codebook, hellinger, mean_pairwise_distance, nsd,
-                                      perplexity, score_latent)
-
-from learned_helpers import natural, trained
+from evalsuite.learned.latent import (
+    code_histogram,
+    fit_codebook,
+    hellinger,
+    mean_pairwise_distance,
+    nsd,
+    perplexity,
+    score_latent,
+)
 
 
 def test_nsd_of_latents_moving_at_constant_speed_on_a_line():

@@ -159,7 +159,9 @@ def test_yoon_bone_direction_checkpoint_with_fc_mu_head(tmp_path):
                                        "--stride", "10", "-o", str(out)])
     assert result.exit_code == 0, result.output
     model = load_model(out)
-    assert model.arch.variational_head and model.window == 34 and model.fps == 15.0
+    assert model.arch.variational_head
+    assert model.window == 34
+    assert model.fps == 15.0
     assert model.representation["bones"][3] == ["j1", "j4"]
     x = np.random.default_rng(3).normal(size=(8, 34, 27))
     np.testing.assert_allclose(model.encode(x, normalized=True), reference_features(state, x, fc_mu=True),
@@ -176,12 +178,15 @@ def test_import_rejects_checkpoints_that_do_not_fit(tmp_path):
     torch.save({"pose_dim": 168, "n_frames": 30, "gen_dict": bad}, ckpt)
     r = CliRunner().invoke(main, ["fgd", "import-genea", str(ckpt), "--stats", str(stats), "--joints", "genea2023",
                                   "-o", str(tmp_path / "x.pt")])
-    assert r.exit_code == 1 and "out_net.6.weight" in r.output and "Traceback" not in r.output
+    assert r.exit_code == 1
+    assert "out_net.6.weight" in r.output
+    assert "Traceback" not in r.output
     good = tmp_path / "good.bin"
     torch.save({"pose_dim": 168, "n_frames": 30, "gen_dict": state}, good)
     r = CliRunner().invoke(main, ["fgd", "import-genea", str(good), "--stats", str(stats), "--joints",
                                   "genea2023_upper", "-o", str(tmp_path / "x.pt")])
-    assert r.exit_code == 1 and "168 values per frame" in r.output
+    assert r.exit_code == 1
+    assert "168 values per frame" in r.output
     np.savez(stats, mean=np.zeros(168), std=np.zeros(168))
     with pytest.raises(InputError, match="non-positive"):
         from evalsuite.learned.genea import import_checkpoint

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import torch
 from click.testing import CliRunner
+from learned_helpers import FPS, WINDOW, natural, trained
 
 from evalsuite.cli import main
 from evalsuite.errors import InputError
@@ -14,8 +15,6 @@ from evalsuite.learned.sanity import check_model
 from evalsuite.learned.training import train_model
 from evalsuite.motion import save_motion
 
-from learned_helpers import FPS, WINDOW, natural, trained
-
 
 def test_briefly_trained_encoder_reproduces_the_sanity_ordering():
     result = check_model(trained(), natural(), seed=0)
@@ -24,7 +23,8 @@ def test_briefly_trained_encoder_reproduces_the_sanity_ordering():
     rows = result["rows"]
     noise = [r["fgd"] for r in rows if r["perturbation"] == "gaussian noise"]
     jitter = [r["fgd"] for r in rows if r["perturbation"] == "temporal jitter"]
-    assert noise == sorted(noise) and jitter == sorted(jitter)
+    assert noise == sorted(noise)
+    assert jitter == sorted(jitter)
     assert rows[0]["fgd"] < min(noise[-1], jitter[-1], rows[-1]["fgd"])
 
 
@@ -38,7 +38,8 @@ def test_save_and_load_give_bit_identical_features(tmp_path):
     np.testing.assert_array_equal(loaded.features(m), model.features(m))
     assert loaded.meta["training"]["seed"] == 0
     assert loaded.meta["representation"]["joints"] == m.joint_names
-    assert np.array_equal(loaded.mean, model.mean) and np.array_equal(loaded.std, model.std)
+    assert np.array_equal(loaded.mean, model.mean)
+    assert np.array_equal(loaded.std, model.std)
     # A changed byte of the weights is detected.
     payload = torch.load(path, weights_only=True)
     payload["state_dict"]["pose_encoder.out_net.6.bias"][0] += 1e-3
@@ -61,7 +62,8 @@ def test_same_seed_gives_the_same_model_and_fgd_twice():
     fb = score_fgd(b, ref, {"c": cond}, raw=False, n_bootstrap=50, seed=1)
     assert fa == fb
     history = a.meta["training"]["history"]
-    assert len(history) == 2 and all(np.isfinite(h["val_loss"]) for h in history)
+    assert len(history) == 2
+    assert all(np.isfinite(h["val_loss"]) for h in history)
 
 
 def test_cli_train_info_check_score_end_to_end(tmp_path):
@@ -79,14 +81,18 @@ def test_cli_train_info_check_score_end_to_end(tmp_path):
     r = runner.invoke(main, ["fgd", "train", str(nat_dir), "--joints", "all", "--window", str(WINDOW), "--epochs",
                              "6", "--lr", "1e-3", "--seed", "0", "-o", str(model_path)])
     assert r.exit_code == 0, r.output
-    assert "validation loss" in r.output and "content hash" in r.output
+    assert "validation loss" in r.output
+    assert "content hash" in r.output
     model = load_model(model_path)
     assert model.meta["training"]["data"][0]["file_sha256"] is not None
     r = runner.invoke(main, ["fgd", "info", str(model_path)])
-    assert r.exit_code == 0 and model.short_hash in r.output and "seed 0" in r.output
+    assert r.exit_code == 0
+    assert model.short_hash in r.output
+    assert "seed 0" in r.output
     r = runner.invoke(main, ["fgd", "check", str(model_path), str(nat_dir)])
     assert r.exit_code == 0, r.output
-    assert "| gaussian noise |" in r.output and "FAIL" not in r.output
+    assert "| gaussian noise |" in r.output
+    assert "FAIL" not in r.output
     r = runner.invoke(main, ["fgd", "score", str(model_path), str(nat_dir), str(gen_dir), "--bootstrap", "100",
                              "--codes", "8", "--format", "csv", "-o", str(tmp_path / "fgd.csv")])
     assert r.exit_code == 0, r.output
@@ -96,19 +102,24 @@ def test_cli_train_info_check_score_end_to_end(tmp_path):
     assert set(table["metric"]) == {"fgd", "fgd_raw", "nsd_k1", "nsd_k2", "codebook_hellinger", "codebook_perplexity"}
     assert (table["model_hash"] == model.content_hash).all()
     fgd_row = table[(table.metric == "fgd") & (table.condition == "SYS_noisy")].iloc[0]
-    assert fgd_row.value > 0 and fgd_row.ci_low <= fgd_row.value <= fgd_row.ci_high
+    assert fgd_row.value > 0
+    assert fgd_row.ci_low <= fgd_row.value <= fgd_row.ci_high
     r = runner.invoke(main, ["fgd", "score", str(model_path), str(nat_dir), str(tmp_path / "nothing_here")])
-    assert r.exit_code != 0 and "Traceback" not in r.output
+    assert r.exit_code != 0
+    assert "Traceback" not in r.output
 
 
 def test_bone_direction_variant_trains_with_the_yoon_head():
     nat = dict(list(natural().items())[:3])
     model = train_model(nat, joints="genea2020_upper", window=WINDOW, fps=FPS, epochs=1, seed=0, progress=False,
                         representation="bone_directions", architecture="yoon2020")
-    assert model.arch.variational_head and model.arch.conv_channels == (32, 64)
+    assert model.arch.variational_head
+    assert model.arch.conv_channels == (32, 64)
     bones = model.representation["bones"]
-    assert ["Spine", "Spine1"] in bones and ["RightForeArm", "RightHand"] in bones
-    assert len(bones) == 14 and model.arch.pose_dim == 42
+    assert ["Spine", "Spine1"] in bones
+    assert ["RightForeArm", "RightHand"] in bones
+    assert len(bones) == 14
+    assert model.arch.pose_dim == 42
     assert np.array_equal(model.std, np.ones(42))  # Yoon et al.: mean direction subtracted, no std
     vec = model.pose_vectors(nat["take00"]).reshape(-1, 14, 3)
     np.testing.assert_allclose(np.linalg.norm(vec, axis=-1), 1.0)

@@ -30,7 +30,8 @@ def test_align_lengths_truncates_and_warns_beyond_one_second():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         x, y, d = align_lengths(a, b, fps=30)   # 20 frames = 0.67 s: no warning
-    assert len(x) == len(y) == 80 and d == pytest.approx(20 / 30)
+    assert len(x) == len(y) == 80
+    assert d == pytest.approx(20 / 30)
     with pytest.warns(LengthMismatchWarning, match="truncated to 80"):
         align_lengths(a, b, fps=10)             # 2 s apart
 

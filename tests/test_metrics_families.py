@@ -12,8 +12,15 @@ from evalsuite.cli import main
 from evalsuite.errors import InputError
 from evalsuite.metrics import average_jerk, average_position_error, average_speed, div_k, l1div
 from evalsuite.metrics.engine import score_folders
-from evalsuite.metrics.families import (MetricFamily, MetricInfo, ReduceContext, SequenceContext,
-                                        register_family, registered_families, unregister_family)
+from evalsuite.metrics.families import (
+    MetricFamily,
+    MetricInfo,
+    ReduceContext,
+    SequenceContext,
+    register_family,
+    registered_families,
+    unregister_family,
+)
 
 
 @pytest.fixture(scope="module")

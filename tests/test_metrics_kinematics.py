@@ -3,8 +3,15 @@ import numpy as np
 import pytest
 
 from evalsuite.errors import InputError
-from evalsuite.metrics import (CONVENTIONS, across_sequences, average_acceleration, average_jerk, average_speed,
-                               derivative_norms, sequence_means)
+from evalsuite.metrics import (
+    CONVENTIONS,
+    across_sequences,
+    average_acceleration,
+    average_jerk,
+    average_speed,
+    derivative_norms,
+    sequence_means,
+)
 
 
 def _times(fps, seconds=2.0):

@@ -96,7 +96,8 @@ def test_odd_but_valid_syntax():
     assert skeleton.channels[0] == ("Xposition", "Yposition", "Zposition", "Yrotation", "Xrotation", "Zrotation")
     np.testing.assert_allclose(skeleton.offsets[0], [1.5, 1e-3, 0.0])
     assert values.shape == (2, 12)
-    assert values[1, 0] == 10.0 and values[0, 6] == 1.5
+    assert values[1, 0] == 10.0
+    assert values[0, 6] == 1.5
     assert abs(frame_time - 0.0333333) < 1e-12
 
 

@@ -28,9 +28,12 @@ def test_version_and_help():
 
 def test_info_text_and_json():
     out = run("info", sample_path("walk01")).output
-    assert "joints     19" in out and "fps        24" in out and "centimetres" in out
+    assert "joints     19" in out
+    assert "fps        24" in out
+    assert "centimetres" in out
     data = json.loads(run("info", "--json", "--joints", sample_path("walk01")).output)
-    assert data["frames"] == 101 and data["joint_list"][1]["parent"] == "Hips"
+    assert data["frames"] == 101
+    assert data["joint_list"][1]["parent"] == "Hips"
 
 
 def test_convert_bvh_to_npz_with_options(tmp_path):
@@ -48,9 +51,13 @@ def test_convert_bvh_to_bvh_and_positions_to_bvh_refused(tmp_path):
     res = run("convert", sample_path("mocapbank"), tmp_path / "m.bvh", "--fps", "60")
     assert res.exit_code == 0
     assert evalsuite.load_motion(tmp_path / "m.bvh").n_frames == 909
-    res = CliRunner().invoke(main, ["convert", str(sample_path("walk01")), str(tmp_path / "x.bvh"),
-                                    "--joints", "genea2020_upper"])
+    # positions (here written from the BVH) cannot become a BVH: the refusal names what to write instead
+    assert run("convert", sample_path("walk01"), tmp_path / "walk.npz").exit_code == 0
+    res = CliRunner().invoke(main, ["convert", str(tmp_path / "walk.npz"), str(tmp_path / "x.bvh")])
     assert res.exit_code == 1
+    assert "holds positions only and cannot be written as BVH" in res.output
+    assert "Traceback" not in res.output
+    assert not (tmp_path / "x.bvh").exists()
 
 
 def test_bad_file_gives_message_without_traceback(tmp_path):

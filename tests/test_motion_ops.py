@@ -65,7 +65,8 @@ def test_select_preset_on_genea_named_skeleton(humanoid):
     np.testing.assert_array_equal(upper.positions(), humanoid.positions()[:, [humanoid.joint_index(n)
                                                                               for n in GENEA2020_UPPER]])
     # Spine's parent Hips is gone: it becomes a root; Spine1's parent is Spine.
-    assert upper.parents[0] == -1 and upper.joint_names[upper.parents[1]] == "Spine"
+    assert upper.parents[0] == -1
+    assert upper.joint_names[upper.parents[1]] == "Spine"
 
 
 def test_drop_subtree_keeps_bvh_and_world_positions(humanoid):
@@ -86,7 +87,8 @@ def test_unknown_joint_names_are_listed(walk):
 
 def test_resample_integer_ratio_keeps_frames(humanoid):
     down = ops.resample(humanoid, 15)
-    assert down.fps == 15 and down.n_frames == 30
+    assert down.fps == 15
+    assert down.n_frames == 30
     np.testing.assert_allclose(down.positions(), humanoid.positions()[::2], atol=1e-9)
 
 
@@ -171,11 +173,13 @@ def test_npz_npy_csv_round_trips(walk, tmp_path):
     names = walk.position_names(end_sites=True)
     evalsuite.save_motion(walk, tmp_path / "w.npz", end_sites=True)
     m = evalsuite.load_motion(tmp_path / "w.npz")
-    assert m.joint_names == names and m.fps == 24
+    assert m.joint_names == names
+    assert m.fps == 24
     np.testing.assert_array_equal(m.positions(), pos)
     evalsuite.save_motion(walk, tmp_path / "w.csv")
     c = evalsuite.load_motion(tmp_path / "w.csv")
-    assert c.joint_names == walk.joint_names and c.fps == 24
+    assert c.joint_names == walk.joint_names
+    assert c.fps == 24
     np.testing.assert_allclose(c.positions(), walk.positions(), atol=1e-6)
     evalsuite.save_motion(walk, tmp_path / "w.npy")
     with pytest.raises(InputError, match="give fps"):
@@ -188,7 +192,8 @@ def test_genea_style_flat_npy(walk, tmp_path):
     flat = walk.positions().reshape(walk.n_frames, -1)
     np.save(tmp_path / "flat.npy", flat)
     m = evalsuite.load_motion(tmp_path / "flat.npy", fps=24)
-    assert m.joint_names[0] == "joint0" and m.n_joints == 19
+    assert m.joint_names[0] == "joint0"
+    assert m.n_joints == 19
     np.testing.assert_array_equal(m.positions(), walk.positions())
     with pytest.raises(InputError, match="3 joint names given but the array has 19 joints"):
         evalsuite.load_motion(tmp_path / "flat.npy", fps=24, joint_names=["a", "b", "c"])
@@ -207,7 +212,9 @@ def test_bad_positions_csv_names_row_and_column(tmp_path):
     (tmp_path / "p.csv").write_text("time,a.x,a.y,a.z\n0,1,2,3\n0.1,1,oops,3\n")
     with pytest.raises(InputError) as info:
         evalsuite.load_motion(tmp_path / "p.csv")
-    assert info.value.line == 3 and info.value.field == "a.y" and "oops" in str(info.value)
+    assert info.value.line == 3
+    assert info.value.field == "a.y"
+    assert "oops" in str(info.value)
     (tmp_path / "q.csv").write_text("a.x,a.y\n1,2\n")
     with pytest.raises(InputError, match="3 columns per joint"):
         evalsuite.load_motion(tmp_path / "q.csv", fps=30)

@@ -13,7 +13,8 @@ def test_demo_step_renders_a_comparison_and_a_study_stimuli_set(tmp_path):
     run(tmp_path, lines.append)
     compare = tmp_path / "render" / "compare.mp4"
     frames, seconds = imageio_ffmpeg.count_frames_and_secs(str(compare))
-    assert frames == 90 and abs(seconds - 3.0) < 1e-6
+    assert frames == 90
+    assert abs(seconds - 3.0) < 1e-6
     assert (tmp_path / "render" / "compare.png").is_file()
     with open(tmp_path / "render" / "stimuli" / "manifest.csv", newline="") as f:
         rows = list(csv.DictReader(f))
@@ -34,4 +35,5 @@ def test_demo_uses_condition_folders_when_an_earlier_step_wrote_them(tmp_path):
         for seg in ("seg00", "seg01"):
             (folder / f"{seg}.bvh").write_text("placeholder")
     conditions, segments = find_conditions(tmp_path)
-    assert list(conditions) == ["natural", "static", "smoothed"] and segments == ["seg00", "seg01"]
+    assert list(conditions) == ["natural", "static", "smoothed"]
+    assert segments == ["seg00", "seg01"]

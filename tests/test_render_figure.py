@@ -3,11 +3,20 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from render_helpers import NAMES, PARENTS, TPOSE, waving_motion
 
 from evalsuite.errors import InputError
-from render_helpers import NAMES, PARENTS, TPOSE, waving_motion
-from renderers.figure import (CENTRE, LEFT, RIGHT, FigureMesh, FigureStyle, forward_direction, head_index,
-                              joint_side, leg_mask)
+from renderers.figure import (
+    CENTRE,
+    LEFT,
+    RIGHT,
+    FigureMesh,
+    FigureStyle,
+    forward_direction,
+    head_index,
+    joint_side,
+    leg_mask,
+)
 from renderers.render import center_on_ground
 from renderers.scene import RenderSettings
 
@@ -60,7 +69,8 @@ def test_mesh_vertices_lie_on_spheres_and_cylinders():
         rel = bones[k] - a
         t = rel @ axis
         radial = np.linalg.norm(rel - t[:, None] * axis, axis=1)
-        assert t.min() == pytest.approx(0.0, abs=1e-4) and t.max() == pytest.approx(np.linalg.norm(b - a), rel=1e-5)
+        assert t.min() == pytest.approx(0.0, abs=1e-4)
+        assert t.max() == pytest.approx(np.linalg.norm(b - a), rel=1e-5)
         side = radial > 1e-3   # cap centres sit on the axis
         np.testing.assert_allclose(radial[side], mesh.bone_radius[k], rtol=1e-4)
     # the right arm is drawn in the right side's colour, the spine in the centre colour

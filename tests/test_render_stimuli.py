@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
+from render_helpers import RATE, decode, waving_motion
 
 from evalsuite.cli import main
 from evalsuite.motion.io import save_motion
@@ -19,7 +20,6 @@ from renderers.audio import decode_audio, speech_like_audio, write_wav
 from renderers.render import render_video
 from renderers.scene import RenderSettings
 from renderers.stimuli import MANIFEST_COLUMNS, blinded_name, build_stimuli, file_sha256, load_config, plan
-from render_helpers import RATE, decode, waving_motion
 
 CONDITIONS = {"natural": 15.0, "baseline": 45.0}
 
@@ -60,7 +60,9 @@ def test_batch_writes_blinded_videos_and_manifest_and_skips_up_to_date(tmp_path)
     manifest = tmp_path / "out" / "manifest.csv"
     rows = read_rows(manifest)
     assert list(rows[0]) == MANIFEST_COLUMNS
-    assert result["rendered"] == 7 and result["skipped"] == 0 and len(rows) == 7
+    assert result["rendered"] == 7
+    assert result["skipped"] == 0
+    assert len(rows) == 7
     stim = [r for r in rows if r["kind"] == "stimulus"]
     att = [r for r in rows if r["kind"] == "attention"]
     assert {(r["condition"], r["segment"]) for r in stim} == {(c, s) for c in CONDITIONS for s in ("seg01", "seg02")}
@@ -69,7 +71,9 @@ def test_batch_writes_blinded_videos_and_manifest_and_skips_up_to_date(tmp_path)
     for r in rows:
         video = tmp_path / "out" / r["file"]
         assert file_sha256(video) == r["sha256"]
-        assert int(r["n_frames"]) == 30 and r["fps"] == "30" and (r["width"], r["height"]) == ("96", "72")
+        assert int(r["n_frames"]) == 30
+        assert r["fps"] == "30"
+        assert (r["width"], r["height"]) == ("96", "72")
         assert imageio_ffmpeg.count_frames_and_secs(str(video))[0] == 30
     # The study app (issue 6) accepts this manifest, including its blinding check.
     from study_app.definition import load_manifest
@@ -78,7 +82,8 @@ def test_batch_writes_blinded_videos_and_manifest_and_skips_up_to_date(tmp_path)
 
     mtimes = {r["file"]: os.stat(tmp_path / "out" / r["file"]).st_mtime_ns for r in rows}
     again = build_stimuli(config, echo=lambda *a: None)
-    assert again["rendered"] == 0 and again["skipped"] == 7
+    assert again["rendered"] == 0
+    assert again["skipped"] == 7
     assert {r["file"]: os.stat(tmp_path / "out" / r["file"]).st_mtime_ns for r in rows} == mtimes
     assert read_rows(manifest) == rows
 
@@ -130,6 +135,7 @@ def test_conditions_of_one_segment_share_the_camera(tmp_path):
         assert np.all((uv >= 0) & (uv <= [96, 72]))
 
 
+@pytest.mark.slow
 def test_jobs_processes_and_dask_cluster_render_the_same_manifest(tmp_path):
     config = make_project(tmp_path, segments=("seg01",), seconds=0.5, checks=False, width=64, height=48)
     res = CliRunner().invoke(main, ["render", "stimuli", str(config), "--jobs", "2"])
@@ -138,7 +144,7 @@ def test_jobs_processes_and_dask_cluster_render_the_same_manifest(tmp_path):
     rows = read_rows(tmp_path / "out" / "manifest.csv")
     assert len(rows) == 2
 
-    import distributed   # part of the [test] extra
+    import distributed  # part of the [test] extra
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
         res = CliRunner().invoke(main, ["render", "stimuli", str(config), "--dask", cluster.scheduler_address,
@@ -200,7 +206,8 @@ def test_instruction_appears_a_few_seconds_in(source_video, tmp_path):
     _, dst = decode(out)
     diff = np.abs(dst.astype(float) - src.astype(float)).mean(axis=(1, 2, 3))
     first = int(np.ceil(0.4 * 30))
-    assert diff[:first].max() < 2 and diff[first:].min() > 15
+    assert diff[:first].max() < 2
+    assert diff[first:].min() > 15
     # the box is red: in the middle rows of a late frame, red dominates
     mid = dst[-1, 50:70, 20:140].astype(int)
     assert (mid[..., 0] - mid[..., 2]).mean() > 60
@@ -211,14 +218,19 @@ def test_bad_config_is_a_clear_error(tmp_path):
     path.write_text(yaml.safe_dump({"segments": ["a"], "conditions": {"x": "m/{segment}.bvh"},
                                     "render": {"width": 101}}))
     res = CliRunner().invoke(main, ["render", "stimuli", str(path)])
-    assert res.exit_code == 1 and "Error:" in res.output and "even" in res.output
+    assert res.exit_code == 1
+    assert "Error:" in res.output
+    assert "even" in res.output
     path.write_text(yaml.safe_dump({"segments": ["a"], "conditions": {"x": "m/{segment}.bvh"}}))
     res = CliRunner().invoke(main, ["render", "stimuli", str(path)])
-    assert res.exit_code == 1 and "not found" in res.output and "Traceback" not in res.output
+    assert res.exit_code == 1
+    assert "not found" in res.output
+    assert "Traceback" not in res.output
     path.write_text(yaml.safe_dump({"segments": ["a"], "conditions": {"x": "m.bvh"},
                                     "attention_checks": [{"check": "loud"}]}))
     res = CliRunner().invoke(main, ["render", "stimuli", str(path)])
-    assert res.exit_code == 1 and "attention_checks[0].check" in res.output
+    assert res.exit_code == 1
+    assert "attention_checks[0].check" in res.output
 
 
 def test_attention_cli(source_video, tmp_path):

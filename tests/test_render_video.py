@@ -11,10 +11,10 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from render_helpers import NAMES, PARENTS, RATE, TPOSE, decode, decoded_audio_seconds, ffmpeg_stream_info, waving_motion
 
 from evalsuite.cli import main
 from evalsuite.motion import Motion
-from render_helpers import NAMES, PARENTS, RATE, TPOSE, decode, decoded_audio_seconds, ffmpeg_stream_info, waving_motion
 from renderers.audio import speech_like_audio, write_wav
 from renderers.camera import Camera, frame_points, view_direction
 from renderers.render import prepare_motions, render_frames, render_video, view_for
@@ -31,10 +31,15 @@ def test_clip_decodes_with_expected_frames_size_fps_and_audio(tmp_path):
     assert info["n_frames"] == 30
     meta, frames = decode(out)
     assert frames.shape == (30, 120, 160, 3)
-    assert meta["fps"] == 30.0 and meta["codec"] == "h264" and meta["audio_codec"] == "aac"
+    assert meta["fps"] == 30.0
+    assert meta["codec"] == "h264"
+    assert meta["audio_codec"] == "aac"
     assert imageio_ffmpeg.count_frames_and_secs(str(out)) == (30, pytest.approx(1.0, abs=1e-6))
     text = ffmpeg_stream_info(out)
-    assert "Video: h264" in text and "160x120" in text and "30 fps" in text and "Audio: aac" in text
+    assert "Video: h264" in text
+    assert "160x120" in text
+    assert "30 fps" in text
+    assert "Audio: aac" in text
     # AAC codes in 1024-sample frames; the decoded length is the motion's within one AAC frame.
     assert decoded_audio_seconds(out) == pytest.approx(1.0, abs=1024 / RATE)
     # imageio v3 decodes the same frames
@@ -45,12 +50,14 @@ def test_video_fps_follows_the_motion_or_the_resampling(tmp_path):
     m = waving_motion(1.0, 24.0)
     out = tmp_path / "v24.mp4"
     render_video(prepare_motions([m], RenderSettings(width=96, height=72)), out, RenderSettings(width=96, height=72))
-    assert probe(out)["fps"] == 24.0 and imageio_ffmpeg.count_frames_and_secs(str(out))[0] == 24
+    assert probe(out)["fps"] == 24.0
+    assert imageio_ffmpeg.count_frames_and_secs(str(out))[0] == 24
     settings = RenderSettings(width=96, height=72, fps=12.0)
     out = tmp_path / "v12.mp4"
     info = render_video(prepare_motions([m], settings), out, settings)
     # 24 frames at 24 fps span 23/24 s; resampled at 12 fps: frames at 0, 1/12, ..., 11/12 s
-    assert info["n_frames"] == 12 and probe(out)["fps"] == 12.0
+    assert info["n_frames"] == 12
+    assert probe(out)["fps"] == 12.0
 
 
 @pytest.mark.parametrize("audio_s, frames, warns", [(1.5, 30, True), (0.5, 15, True), (1.02, 30, False),
@@ -86,7 +93,8 @@ def test_figure_pixels_are_where_the_joints_project(tmp_path):
         assert tuple(img[y, x]) == (255, 255, 255), "far corners show the background"
     # the figure is centred: its drawn pixels' bounding box is symmetric about the centre
     ys, xs = np.nonzero(np.any(img < 200, axis=2))
-    assert abs((xs.min() + xs.max()) / 2 - 160) < 6 and abs((ys.min() + ys.max()) / 2 - 120) < 6
+    assert abs((xs.min() + xs.max()) / 2 - 160) < 6
+    assert abs((ys.min() + ys.max()) / 2 - 120) < 6
     assert xs.min() > 2 and ys.min() > 2 and xs.max() < 317 and ys.max() < 237, "not clipped"
 
 
@@ -112,8 +120,10 @@ def test_framing_fits_every_point_with_the_margin():
         d = view_direction(np.array([0.0, 0.0, 1.0]), "y", view, 8.0)
         cam = frame_points(pts, d, "y", 400, 300, margin=0.1)
         uv = cam.project(pts)
-        assert uv[:, 0].min() >= 0.05 * 400 - 1e-6 and uv[:, 0].max() <= 0.95 * 400 + 1e-6
-        assert uv[:, 1].min() >= 0.05 * 300 - 1e-6 and uv[:, 1].max() <= 0.95 * 300 + 1e-6
+        assert uv[:, 0].min() >= 0.05 * 400 - 1e-6
+        assert uv[:, 0].max() <= 0.95 * 400 + 1e-6
+        assert uv[:, 1].min() >= 0.05 * 300 - 1e-6
+        assert uv[:, 1].max() <= 0.95 * 300 + 1e-6
         # tight on one axis: the extent touches the margin on width or height
         span = max((uv[:, 0].max() - uv[:, 0].min()) / 360, (uv[:, 1].max() - uv[:, 1].min()) / 270)
         assert span == pytest.approx(1.0, abs=0.02)
@@ -147,11 +157,14 @@ def test_compare_cli_side_by_side_with_audio_and_captions(tmp_path):
                                     "--width", "128", "--height", "96", "--captions", "Natural,A,B"])
     assert res.exit_code == 0, res.output
     meta, frames = decode(out)
-    assert frames.shape[0] == 30 and meta["audio_codec"] == "aac"
+    assert frames.shape[0] == 30
+    assert meta["audio_codec"] == "aac"
     h, w = frames.shape[1:3]
     assert w >= 3 * 128 and h > 96   # three panels in a row, caption strip above
     res = CliRunner().invoke(main, ["render", "compare", *paths, "-o", str(out), "--captions", "only,two"])
-    assert res.exit_code == 1 and "Error:" in res.output and "captions" in res.output
+    assert res.exit_code == 1
+    assert "Error:" in res.output
+    assert "captions" in res.output
     png = tmp_path / "s.png"
     res = CliRunner().invoke(main, ["render", "still", paths[0], "-o", str(png), "--width", "128", "--height", "96",
                                     "--time", "0.5"])
@@ -245,7 +258,8 @@ def test_audio_is_aligned_to_frame_zero(tmp_path):
                           "-ac", "1", "-ar", str(RATE), "-"], capture_output=True, check=True).stdout
     decoded = np.frombuffer(raw, np.int16).astype(float) / 32768
     loud = np.flatnonzero(np.abs(decoded) > 0.1)
-    assert abs(loud[0] / RATE - 0.5) < 0.01 and abs(loud[-1] / RATE - 0.6) < 0.01
+    assert abs(loud[0] / RATE - 0.5) < 0.01
+    assert abs(loud[-1] / RATE - 0.6) < 0.01
 
 
 def test_partial_redraw_gives_the_same_frames_as_full_redraws():

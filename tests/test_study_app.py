@@ -10,15 +10,15 @@ import threading
 
 import numpy as np
 import pytest
-
 import study_helpers as h
+
 from study_app import create_app
-from study_app.errors import StudyStateError
-from study_app.storage import Answer, Event, ParticipantSession, Plan
-from study_app.testing import create_database, throwaway_postgres
 from study_app.context import store_of, study_of
+from study_app.errors import StudyStateError
 from study_app.pages import Outcome
+from study_app.storage import Answer, Event, ParticipantSession, Plan
 from study_app.submission import Submission
+from study_app.testing import create_database, throwaway_postgres
 
 _counter = itertools.count()
 
@@ -36,7 +36,7 @@ def pg_server():
         yield url
 
 
-@pytest.fixture(params=["sqlite", "postgresql"])
+@pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
 def db_url(request, tmp_path):
     if request.param == "sqlite":
         return f"sqlite:///{tmp_path / 'study.db'}"
@@ -69,9 +69,11 @@ def test_full_sessions_export_equals_answers(study_dir, db_url):
     rng = np.random.default_rng(1)
     done, r = h.run_participant(app, app.test_client(), "pfinish01", rng)
     html = r.get_data(as_text=True)
-    assert "DONE1234" in html and "https://app.prolific.com/submissions/complete?cc=DONE1234" in html
+    assert "DONE1234" in html
+    assert "https://app.prolific.com/submissions/complete?cc=DONE1234" in html
     failed, r = h.run_participant(app, app.test_client(), "pfail0001", rng, fail_checks=2)
-    assert "FAIL5678" in r.get_data(as_text=True) and "cc=FAIL5678" in r.get_data(as_text=True)
+    assert "FAIL5678" in r.get_data(as_text=True)
+    assert "cc=FAIL5678" in r.get_data(as_text=True)
     partial, _ = h.run_participant(app, app.test_client(), "ppartial1", rng, stop_after=6)
     rows = export_rows(app)
     keys = h.as_keys(rows)
@@ -84,8 +86,11 @@ def test_full_sessions_export_equals_answers(study_dir, db_url):
         ("pfinish01", "1"), ("pfail0001", "0")}
     assert all(r["is_training"] == "1" for r in rows if r["page"].startswith("training"))
     for r in rows:
-        assert int(r["rt_ms"]) >= 0 and r["shown_at"] <= r["answered_at"]
-        assert r["shown_at"].endswith("Z") and r["study"] == "gesture-test" and r["platform"] == "prolific"
+        assert int(r["rt_ms"]) >= 0
+        assert r["shown_at"] <= r["answered_at"]
+        assert r["shown_at"].endswith("Z")
+        assert r["study"] == "gesture-test"
+        assert r["platform"] == "prolific"
     # raw JSON has the questionnaire and the interaction log
     raw = json.loads(app.test_client().get("/admin/export/raw.json",
                                            headers={"Authorization": f"Bearer {h.ADMIN}"}).data)
@@ -93,6 +98,7 @@ def test_full_sessions_export_equals_answers(study_dir, db_url):
     assert {e["kind"] for e in raw["events"]} == {"ended"}
     # the CLI export reads the same database
     from click.testing import CliRunner
+
     from evalsuite.cli import main
     out = study_dir / f"cli-{next(_counter)}.csv"
     res = CliRunner().invoke(main, ["study", "export", str(study_dir / "study.yaml"), "--db", db_url,
@@ -111,13 +117,15 @@ def test_replayed_and_double_submissions_store_one_answer(study_dir, db_url):
     body = {"agree": True, "website": ""}
     r1 = p.submit(data, csrf, body, token="tok-consent-1")
     r2 = p.submit(data, csrf, body, token="tok-consent-1")          # network retry
-    assert r1.get_json()["status"] == "stored" and r2.get_json()["status"] == "duplicate"
+    assert r1.get_json()["status"] == "stored"
+    assert r2.get_json()["status"] == "duplicate"
     # the same page again with a new token: refused, the first answer is kept
     r3 = p.submit(data, csrf, {"agree": True, "website": "x"}, token="tok-consent-2")
     assert r3.status_code == 409
     with store.Session() as db:
         answers = db.query(Answer).filter_by(session_id=p.sid).all()
-        assert len(answers) == 1 and answers[0].data["honeypot"] is False
+        assert len(answers) == 1
+        assert answers[0].data["honeypot"] is False
     # concurrent double clicks (same token) and concurrent different answers to one page
     _, data, csrf = p.page()
     answer = {"age": 30, "gender": "male", "comments": ""}
@@ -139,7 +147,8 @@ def test_replayed_and_double_submissions_store_one_answer(study_dir, db_url):
         rows = db.query(Answer).filter_by(session_id=p.sid, page_index=data["index"]).all()
         assert len(rows) == 1
         if rows[0].submit_token == "tok-q-same":
-            assert statuses.count("duplicate") == 5 and statuses.count("conflict") == 4
+            assert statuses.count("duplicate") == 5
+            assert statuses.count("conflict") == 4
         sess = db.get(ParticipantSession, p.sid)
         assert sess.current_page == data["index"] + 1
     # a token used on one page cannot be replayed onto another page
@@ -166,7 +175,8 @@ def test_csrf_is_required_on_every_post(study_dir, sqlite_url):
         for url, body in ((data["answer_url"], good), (data["draft_url"], {"draft": {}}),
                           (data["events_url"], {"events": []})):
             r = client.post(url, json=body, headers=headers)
-            assert r.status_code == 400 and "CSRF" in r.get_data(as_text=True)
+            assert r.status_code == 400
+            assert "CSRF" in r.get_data(as_text=True)
     # a token from another browser's session does not work either
     other = h.Participant(app.test_client(), "pcsrf0002")
     other.enter()
@@ -200,18 +210,21 @@ def test_stimulus_serving_is_limited_to_the_plan(study_dir, sqlite_url):
     p.enter()
     data, csrf, _ = _walk_to(app, p, "pairwise", np.random.default_rng(0))   # the first video page
     ok = p.client.get(data["videos"][0], headers={"Range": "bytes=0-99"})
-    assert ok.status_code == 206 and ok.mimetype == "video/mp4" and len(ok.data) == 100
+    assert ok.status_code == 206
+    assert ok.mimetype == "video/mp4"
+    assert len(ok.data) == 100
     first = sorted((study_dir / "stim").glob("*.mp4"))[0].name
     bad = [f"/s/{p.sid}/media/{data['index']}/9", f"/s/{p.sid}/media/{data['index'] + 1}/0",
            f"/s/{p.sid}/media/-1/0", f"/s/{p.sid}/media/../../../etc/passwd",
            f"/s/{p.sid}/media/{data['index']}/..%2f..%2fstudy.yaml",
            f"/s/{p.sid}/media/%2e%2e/%2e%2e/study.yaml", f"/s/{p.sid}/media/{first}",
-           f"/static/../study.yaml", "/static/..%2f..%2fapp.py", "/static/%2e%2e/app.py",
+           "/static/../study.yaml", "/static/..%2f..%2fapp.py", "/static/%2e%2e/app.py",
            f"/stim/{first}", "/stim/manifest.csv", "/study.yaml"]
     for url in bad:
         r = p.client.get(url)
         assert r.status_code in (403, 404), url
-        assert b"condition" not in r.data and b"file,segment" not in r.data
+        assert b"condition" not in r.data
+        assert b"file,segment" not in r.data
 
 
 def test_condition_names_and_file_names_never_reach_the_participant(study_dir, sqlite_url):
@@ -245,7 +258,9 @@ def test_security_headers_and_cookie_flags(study_dir, sqlite_url):
     client = app.test_client()
     r = client.get(h.prolific_url("pcookie01"))
     cookie = r.headers["Set-Cookie"]
-    assert "Secure" in cookie and "HttpOnly" in cookie and "SameSite=Lax" in cookie
+    assert "Secure" in cookie
+    assert "HttpOnly" in cookie
+    assert "SameSite=Lax" in cookie
     assert "frame-ancestors 'none'" in r.headers["Content-Security-Policy"]
     assert r.headers["X-Content-Type-Options"] == "nosniff"
 
@@ -270,7 +285,9 @@ def test_admin_needs_the_token(study_dir, sqlite_url):
     assert client.post("/admin/login", data={"token": h.ADMIN, "csrf_token": csrf}).status_code == 302
     h.run_participant(app, app.test_client(), "padmin001", np.random.default_rng(2), fail_checks=1)
     page = client.get("/admin/").get_data(as_text=True)
-    assert "padmin001" in page and "SYSALPHA vs SYSBETA" in page and "plan-0000" in page
+    assert "padmin001" in page
+    assert "SYSALPHA vs SYSBETA" in page
+    assert "plan-0000" in page
     assert client.get("/admin/export/results.csv").status_code == 200
 
 
@@ -282,17 +299,20 @@ def test_reentry_resumes_or_is_refused_but_never_restarts(study_dir, db_url):
     p, _ = h.run_participant(app, app.test_client(), "preent001", rng, stop_after=4)
     # same Prolific ID from another browser: same session, same page
     again = h.Participant(app.test_client(), "preent001")
-    assert again.enter().status_code == 302 and again.sid == p.sid
+    assert again.enter().status_code == 302
+    assert again.sid == p.sid
     _, data, _ = again.page()
     assert data["index"] == 4
     # finished participants cannot start over
     done, _ = h.run_participant(app, app.test_client(), "preent002", rng)
     r = h.Participant(app.test_client(), "preent002").enter()
-    assert r.status_code == 409 and "already completed" in r.get_data(as_text=True)
+    assert r.status_code == 409
+    assert "already completed" in r.get_data(as_text=True)
     # failed participants neither
     h.run_participant(app, app.test_client(), "preent003", rng, fail_checks=2)
     r = h.Participant(app.test_client(), "preent003").enter()
-    assert r.status_code == 409 and "cannot take part" in r.get_data(as_text=True)
+    assert r.status_code == 409
+    assert "cannot take part" in r.get_data(as_text=True)
     with store_of(app).Session() as db:
         assert db.query(ParticipantSession).filter_by(participant="preent001").count() == 1
 
@@ -308,19 +328,22 @@ def test_resume_disabled_refuses_reentry(study_dir, sqlite_url):
     app = make_app(study_dir, sqlite_url, study_file="noresume.yaml")
     assert h.Participant(app.test_client(), "pnores001", "gesture-noresume").enter().status_code == 302
     r = h.Participant(app.test_client(), "pnores001", "gesture-noresume").enter()
-    assert r.status_code == 409 and "already started" in r.get_data(as_text=True)
+    assert r.status_code == 409
+    assert "already started" in r.get_data(as_text=True)
 
 
 def test_attention_failures_end_the_session_and_release_the_plan(study_dir, db_url):
     app = make_app(study_dir, db_url)
     store = store_of(app)
     p, r = h.run_participant(app, app.test_client(), "pattn0001", np.random.default_rng(4), fail_checks=2)
-    assert r.status_code == 200 and "did not pass enough" in r.get_data(as_text=True)
+    assert r.status_code == 200
+    assert "did not pass enough" in r.get_data(as_text=True)
     with store.Session() as db:
         sess = db.get(ParticipantSession, p.sid)
         assert (sess.status, sess.end_reason, sess.failed_checks) == ("failed", "attention_checks", 2)
         plan = db.get(Plan, sess.plan_id)
-        assert plan.status == "free" and plan.times_released == 1
+        assert plan.status == "free"
+        assert plan.times_released == 1
     # further answers are refused
     _, data, _ = p.page()
     assert data is None
@@ -340,7 +363,9 @@ def test_honeypot_ends_the_session(study_dir, sqlite_url):
     assert p.submit(data, csrf, {"agree": True, "website": "http://spam"}).status_code == 200
     with store_of(app).Session() as db:
         sess = db.get(ParticipantSession, p.sid)
-        assert sess.honeypot and sess.status == "failed" and sess.end_reason == "honeypot"
+        assert sess.honeypot
+        assert sess.status == "failed"
+        assert sess.end_reason == "honeypot"
 
 
 def test_expired_reservation_is_released_and_cannot_restart(study_dir, db_url):
@@ -360,7 +385,8 @@ def test_expired_reservation_is_released_and_cannot_restart(study_dir, db_url):
         assert db.get(ParticipantSession, b.sid).plan_id == plan_id
         assert db.get(ParticipantSession, a.sid).status == "expired"
     r = h.Participant(app.test_client(), "pexpire01").enter()
-    assert r.status_code == 409 and "expired" in r.get_data(as_text=True)
+    assert r.status_code == 409
+    assert "expired" in r.get_data(as_text=True)
     assert a.client.get(f"/s/{a.sid}/").status_code == 410
 
 
@@ -369,7 +395,8 @@ def test_study_full(study_dir, sqlite_url):
     for i in range(6):
         assert h.Participant(app.test_client(), f"pfull{i:04d}").enter().status_code == 302
     r = h.Participant(app.test_client(), "pfull9999").enter()
-    assert r.status_code == 503 and "All places" in r.get_data(as_text=True)
+    assert r.status_code == 503
+    assert "All places" in r.get_data(as_text=True)
 
 
 @pytest.mark.parametrize("url,code,text", [
@@ -382,14 +409,16 @@ def test_study_full(study_dir, sqlite_url):
 def test_entry_parameters_are_validated(study_dir, sqlite_url, url, code, text):
     app = make_app(study_dir, sqlite_url)
     r = app.test_client().get(url)
-    assert r.status_code == code and text in r.get_data(as_text=True)
+    assert r.status_code == code
+    assert text in r.get_data(as_text=True)
 
 
 def test_mobile_devices_are_refused(study_dir, sqlite_url):
     app = make_app(study_dir, sqlite_url)
     ua = "Mozilla/5.0 (iPhone; CPU iPhone OS 17_0 like Mac OS X) Mobile/15E148"
     r = app.test_client().get(h.prolific_url("pmobile01"), headers={"User-Agent": ua})
-    assert r.status_code == 403 and "computer" in r.get_data(as_text=True)
+    assert r.status_code == 403
+    assert "computer" in r.get_data(as_text=True)
 
 
 def _app_for_platform(study_dir, sqlite_url, platform: str, study_id: str):
@@ -409,9 +438,11 @@ def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
     app = _app_for_platform(study_dir, sqlite_url, "mturk", "gesture-mturk")
     client = app.test_client()
     r = client.get("/start/gesture-mturk?assignmentId=ASSIGNMENT_ID_NOT_AVAILABLE&hitId=H1")
-    assert r.status_code == 200 and 'id="preview"' in r.get_data(as_text=True)
+    assert r.status_code == 200
+    assert 'id="preview"' in r.get_data(as_text=True)
     bad = client.get("/start/gesture-mturk?workerId=W1&assignmentId=A1&hitId=H1&turkSubmitTo=https://evil.example")
-    assert bad.status_code == 400 and "turkSubmitTo" in bad.get_data(as_text=True)
+    assert bad.status_code == 400
+    assert "turkSubmitTo" in bad.get_data(as_text=True)
     r = client.get("/start/gesture-mturk?workerId=W1&assignmentId=A1&hitId=H1"
                    "&turkSubmitTo=https%3A%2F%2Fworkersandbox.mturk.com")
     assert r.status_code == 302
@@ -452,7 +483,8 @@ def test_videos_must_be_played_before_answering(study_dir, sqlite_url):
     data, csrf, spec = _walk_to(app, p, "pairwise", rng)              # the first video page
     answer = h.make_answer(study_of(app), spec, rng)
     r = p.submit(data, csrf, answer, played=False)
-    assert r.status_code == 422 and "play every video to the end" in r.get_json()["error"]
+    assert r.status_code == 422
+    assert "play every video to the end" in r.get_json()["error"]
     only_one = [{"id": "evt-only-one", "kind": "ended", "slot": 0, "t": 1.0, "ms": 1}]
     assert p.submit(data, csrf, answer, events=only_one).status_code == 422
     # the second video's end arrives through the periodic event log: now the answer is accepted
@@ -487,7 +519,8 @@ def test_answer_payloads_are_validated(study_dir, sqlite_url, desc, body, fragme
                           headers={"X-CSRFToken": csrf})
     else:
         r = p.post(data["answer_url"], body, csrf)
-    assert r.status_code == 422 and fragment in r.get_json()["error"]
+    assert r.status_code == 422
+    assert fragment in r.get_json()["error"]
 
 
 def _walk_to(app, p, page_type, rng):
@@ -535,7 +568,8 @@ def test_required_reasons_are_not_asked_for_an_equal_judgement(study_dir, sqlite
     p = h.Participant(app.test_client(), "preason01")
     p.enter()
     data, csrf, spec = _walk_to(app, p, "pairwise", np.random.default_rng(0))
-    assert spec["block"] == "hl" and data["reasons_required"] is True
+    assert spec["block"] == "hl"
+    assert data["reasons_required"] is True
     r = p.submit(data, csrf, {"choices": {"human_likeness": "equal"}, "reasons": []})
     assert r.status_code == 200, r.get_json()
     assert p.page()[1]["index"] == data["index"] + 1
@@ -563,7 +597,9 @@ def test_draft_autosave_survives_a_server_restart(study_dir, db_url):
     c2.set_cookie(cookie.key, cookie.value)
     r = c2.get(f"/s/{p.sid}/")
     restored = json.loads(h.PAGE_DATA_RE.search(r.get_data(as_text=True)).group(1))
-    assert restored["index"] == data["index"] and restored["draft"] == draft and restored["ended"] == [0]
+    assert restored["index"] == data["index"]
+    assert restored["draft"] == draft
+    assert restored["ended"] == [0]
     # and re-entry from Prolific in a fresh browser resumes on the same page with the draft
     q = h.Participant(app2.test_client(), "pdraft001")
     q.enter()
@@ -577,13 +613,15 @@ def test_consent_from_a_too_narrow_window_is_refused(study_dir, sqlite_url):
     _, data, csrf = p.page()
     body = {"token": "tok-narrow-01", "answer": {"agree": True, "website": ""}, "width": 640}
     r = p.post(data["answer_url"], body, csrf)
-    assert r.status_code == 422 and "at least 800 pixels" in r.get_json()["error"]
+    assert r.status_code == 422
+    assert "at least 800 pixels" in r.get_json()["error"]
     body["width"], body["token"] = 1280, "tok-narrow-02"
     assert p.post(data["answer_url"], body, csrf).status_code == 200
 
 
 def test_database_with_other_plans_is_refused(study_dir, db_url):
     import copy
+
     from study_app.definition import load_study
     from study_app.design import build_plans
     from study_app.storage import init_db, make_engine

@@ -26,12 +26,14 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import study_helpers as h
 from werkzeug.serving import make_server
 
-import study_helpers as h
 from study_app import create_app
-from study_app.storage import ParticipantSession
 from study_app.context import store_of, study_of
+from study_app.storage import ParticipantSession
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
@@ -136,9 +138,8 @@ class Driver:
     def next(self):
         before = self.page.url, self.data()["index"]
         self.page.wait_for_selector("#next:not([disabled])")
-        with self.page.expect_navigation():
-            with self.page.expect_response(lambda r: "/answer/" in r.url) as resp:
-                self.page.click("#next")
+        with self.page.expect_navigation(), self.page.expect_response(lambda r: "/answer/" in r.url) as resp:
+            self.page.click("#next")
         assert resp.value.status == 200
         return before
 
@@ -233,7 +234,8 @@ def test_participant_journey_in_chromium(env):
                 if draft.get("fields", {}).get("rating-2") == "55":
                     break
                 d.page.wait_for_timeout(50)
-            assert draft["fields"]["rating-2"] == "55" and 2 in draft["touched"]
+            assert draft["fields"]["rating-2"] == "55"
+            assert 2 in draft["touched"]
             n = len(spec["slots"])
             for k in range(n):
                 assert "ok" in d.page.locator(f".status[data-slot='{k}']").get_attribute("class")
@@ -246,7 +248,9 @@ def test_participant_journey_in_chromium(env):
                       screenshot=spec.get("block", spec["type"]) not in seen_blocks or spec.get("check"))
         seen_types.add(spec["type"])
         seen_blocks.add(spec.get("block", spec["type"]))
-    assert reloaded and checks == ["pairwise", "mushra"] and d.reason_gates > 0
+    assert reloaded
+    assert checks == ["pairwise", "mushra"]
+    assert d.reason_gates > 0
     assert seen_types >= {"consent", "questionnaire", "instructions", "pairwise", "mushra", "likert", "headphone_check"}
     d.shot("finish")
     assert d.page.locator("#completion-code").text_content() == "DONE1234"
@@ -256,7 +260,8 @@ def test_participant_journey_in_chromium(env):
     # the same Prolific ID again, in a fresh browser: cannot start over
     again = Driver(env, d.pid)
     again.enter()
-    assert again.sid is None and "already completed" in again.page.content()
+    assert again.sid is None
+    assert "already completed" in again.page.content()
     again.shot("second-entry")
 
     # a second participant fails two attention checks and gets the failure code
@@ -329,7 +334,8 @@ def test_mturk_hit_from_preview_to_external_submit(env):
         d = Driver(SimpleNamespace(server=server, shots=env.shots, browser=env.browser), "A3MTURKWORKER1")
         base = f"{server.url}/start/gesture-mturk?hitId=HIT42"
         d.page.goto(base + "&assignmentId=ASSIGNMENT_ID_NOT_AVAILABLE")
-        assert d.page.is_visible("#preview") and "Accept the HIT" in d.page.content()
+        assert d.page.is_visible("#preview")
+        assert "Accept the HIT" in d.page.content()
         with store_of(server.app).Session() as db_session:
             assert db_session.query(ParticipantSession).count() == 0
         d.page.goto(base + "&assignmentId=ASSIGN7&workerId=A3MTURKWORKER1"
@@ -351,7 +357,8 @@ def test_mturk_hit_from_preview_to_external_submit(env):
         assert "HIT submitted" in d.page.content()
         method, body = posted[0]
         form = dict(urllib.parse.parse_qsl(body))
-        assert method == "POST" and form == {"assignmentId": "ASSIGN7", "completion_code": "DONE1234"}
+        assert method == "POST"
+        assert form == {"assignmentId": "ASSIGN7", "completion_code": "DONE1234"}
         d.context.close()
 
         # MTurk shows an ExternalQuestion in an iframe on its own https page: the study must
@@ -369,11 +376,13 @@ def test_mturk_hit_from_preview_to_external_submit(env):
         frame.locator("#next:not([disabled])").click()
         frame.locator("#q-age").wait_for()          # the next page, reached with the session cookie
         child = w.page.main_frame.child_frames[0]
-        assert child.url.startswith(server.url + "/s/") and "/s/" in child.url
+        assert child.url.startswith(server.url + "/s/")
+        assert "/s/" in child.url
         w.shot("mturk-in-iframe")
         with store_of(server.app).Session() as db_session:
             sess = db_session.query(ParticipantSession).filter_by(participant="A3MTURKWORKER2").one()
-            assert sess.current_page == 1 and sess.platform_data["assignmentId"] == "ASSIGN8"
+            assert sess.current_page == 1
+            assert sess.platform_data["assignmentId"] == "ASSIGN8"
         w.context.close()
     finally:
         server.stop()

@@ -6,10 +6,10 @@ import json
 from collections import Counter
 
 import pytest
+import study_helpers as h
 import yaml
 from click.testing import CliRunner
 
-import study_helpers as h
 from study_app.definition import load_manifest, load_study
 from study_app.design import balance_report, build_plans, read_plans, williams_rows, write_plans
 from study_app.errors import StudyDefinitionError
@@ -211,7 +211,8 @@ def test_manifest_errors(folder, body, line, field, fragment):
     with pytest.raises(StudyDefinitionError) as info:
         load_manifest(path)
     assert fragment in str(info.value), str(info.value)
-    assert info.value.line == line and info.value.field == field
+    assert info.value.line == line
+    assert info.value.field == field
     assert str(path) in str(info.value)
 
 
@@ -247,7 +248,8 @@ def test_williams_square_is_balanced():
             assert len(set(Counter(r[pos] for r in rows).values())) == 1
         if n > 1:              # each ordered neighbour pair equally often
             pairs = Counter((r[i], r[i + 1]) for r in rows for i in range(n - 1))
-            assert len(pairs) == n * (n - 1) and len(set(pairs.values())) == 1
+            assert len(pairs) == n * (n - 1)
+            assert len(set(pairs.values())) == 1
 
 
 def test_plans_are_balanced(folder):
@@ -259,10 +261,14 @@ def test_plans_are_balanced(folder):
     for plan in plans["plans"]:
         pages = plan["pages"]
         assert [p["page"] for p in pages][:4] == ["consent", "demographics", "headphones", "intro"]
-        assert len(pages[2]["trials"]) == 2 and set(pages[2]["trials"]) <= set(range(6))
-        assert pages[4]["training"] and pages[4]["page"] == "training-01"
+        assert len(pages[2]["trials"]) == 2
+        assert set(pages[2]["trials"]) <= set(range(6))
+        assert pages[4]["training"]
+        assert pages[4]["page"] == "training-01"
         hl = [p for p in pages if p.get("block") == "hl" and not p["training"]]
-        assert len(hl) == 4 and hl[2]["check"] and not any(p["check"] for i, p in enumerate(hl) if i != 2)
+        assert len(hl) == 4
+        assert hl[2]["check"]
+        assert not any(p["check"] for i, p in enumerate(hl) if i != 2)
         assert by_file[hl[2]["a"]].kind == "attention"
         segs = [p["segment"] for p in hl if not p["check"]]
         assert len(set(segs)) == len(segs)                       # no segment twice in a block
@@ -275,16 +281,20 @@ def test_plans_are_balanced(folder):
         app = [p for p in pages if p.get("block") == "app"]
         for p in app:     # A is the matched video, B the same condition with other motion
             a, b = by_file[p["a"]], by_file[p["b"]]
-            assert a.condition == b.condition and not a.mismatched and b.mismatched
+            assert a.condition == b.condition
+            assert not a.mismatched
+            assert b.mismatched
             assert a.segment == b.segment == p["segment"]
         ratings = [p for p in pages if p.get("block") == "ratings"]
-        assert "check_slot" in ratings[1] and "check_slot" not in ratings[0]
+        assert "check_slot" in ratings[1]
+        assert "check_slot" not in ratings[0]
         for p in ratings:
             assert {by_file[f].segment for f in p["slots"]} == {p["segment"]}
             assert p["roles"].count("reference") == 1
         check_positions[tuple(i for i, p in enumerate(pages) if p.get("check"))] += 1
     # every comparison equally often, A left and A right equally often
-    assert len(pair_counts) == 3 and set(pair_counts.values()) == {12}
+    assert len(pair_counts) == 3
+    assert set(pair_counts.values()) == {12}
     assert set(side_counts.values()) == {6}
     assert len(check_positions) == 1                              # checks at configured positions
     rep = balance_report(plans, study)
@@ -311,12 +321,14 @@ def test_cli_build_prints_balance_and_errors_cleanly(folder, tmp_path):
     res = runner.invoke(main, ["study", "build", str(folder / "study.yaml"), "-o", str(out),
                                "--db", f"sqlite:///{tmp_path / 'db.sqlite'}"])
     assert res.exit_code == 0, res.output
-    assert "6 session plans" in res.output and "SYSALPHA vs SYSBETA: 3 / 3" in res.output
+    assert "6 session plans" in res.output
+    assert "SYSALPHA vs SYSBETA: 3 / 3" in res.output
     assert "database ready" in res.output
     bad = folder / "broken.yaml"
     bad.write_text("id: x\nstimuli: stim/manifest.csv\npages: 3\n")
     res = runner.invoke(main, ["study", "build", str(bad)])
-    assert res.exit_code == 1 and "Traceback" not in res.output
+    assert res.exit_code == 1
+    assert "Traceback" not in res.output
     assert "pages: expected a list of pages" in res.output
     for cmd in (["study", "--help"], ["study", "build", "--help"], ["study", "serve", "--help"],
                 ["study", "export", "--help"], ["study", "admin-token", "--help"]):
@@ -331,9 +343,12 @@ def test_serve_and_gunicorn_factory_have_no_default_credentials(folder, monkeypa
     from study_app.errors import StudyStateError
     monkeypatch.delenv("EVALSUITE_ADMIN_TOKEN", raising=False)
     res = CliRunner().invoke(main, ["study", "serve", str(folder / "study.yaml")])
-    assert res.exit_code == 2 and "--admin-token" in res.output
+    assert res.exit_code == 2
+    assert "--admin-token" in res.output
     res = CliRunner().invoke(main, ["study", "serve", str(folder / "study.yaml"), "--admin-token", "short"])
-    assert res.exit_code == 1 and "ADMIN_TOKEN" in res.output and "Traceback" not in res.output
+    assert res.exit_code == 1
+    assert "ADMIN_TOKEN" in res.output
+    assert "Traceback" not in res.output
     monkeypatch.setenv("EVALSUITE_STUDY", str(folder / "study.yaml"))
     monkeypatch.delenv("EVALSUITE_SECRET_KEY", raising=False)
     with pytest.raises(StudyStateError, match="EVALSUITE_SECRET_KEY"):

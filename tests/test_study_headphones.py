@@ -11,14 +11,22 @@ from collections import Counter
 
 import numpy as np
 import pytest
-
 import study_helpers as h
-from study_app import create_app
-from study_app.headphones import (FREQUENCY, GAP_SECONDS, ORDERS, RATE, TONE_SECONDS, correct_choice,
-                                  trial_orders, trial_samples, trial_wav)
-from study_app.storage import ParticipantSession, Plan
-from study_app.context import store_of, study_of
 
+from study_app import create_app
+from study_app.context import store_of, study_of
+from study_app.headphones import (
+    FREQUENCY,
+    GAP_SECONDS,
+    ORDERS,
+    RATE,
+    TONE_SECONDS,
+    correct_choice,
+    trial_orders,
+    trial_samples,
+    trial_wav,
+)
+from study_app.storage import ParticipantSession, Plan
 
 # ------------------------------------------------------------------------------ the sounds
 
@@ -51,9 +59,11 @@ def test_each_trial_has_a_plain_a_6db_quieter_and_an_antiphase_tone(order):
     assert np.fft.rfftfreq(len(plain), 1 / RATE)[np.argmax(spectrum)] == pytest.approx(FREQUENCY)
     x = trial_samples(order)
     n = int(RATE * TONE_SECONDS)
-    assert not x[n:n + int(RATE * GAP_SECONDS)].any() and np.abs(x).max() <= 0.25 + 1e-12
+    assert not x[n:n + int(RATE * GAP_SECONDS)].any()
+    assert np.abs(x).max() <= 0.25 + 1e-12
     # ramps: starts and ends at zero
-    assert abs(plain[0, 0]) < 1e-12 and abs(plain[-1, 0]) < 1e-3
+    assert abs(plain[0, 0]) < 1e-12
+    assert abs(plain[-1, 0]) < 1e-3
 
 
 def test_wav_file_holds_the_samples():
@@ -69,7 +79,8 @@ def test_trial_orders_put_the_quiet_tone_everywhere_equally_often():
     orders = trial_orders(12, random.Random(1))
     assert Counter(orders) == {k: 2 for k in range(6)}
     assert Counter(correct_choice(o) for o in orders) == {1: 4, 2: 4, 3: 4}
-    assert trial_orders(12, random.Random(1)) == orders and trial_orders(12, random.Random(2)) != orders
+    assert trial_orders(12, random.Random(1)) == orders
+    assert trial_orders(12, random.Random(2)) != orders
 
 
 # ------------------------------------------------------------------------ in the study app
@@ -117,24 +128,31 @@ def test_defaults_follow_woods_et_al(folder):
     from study_app.definition import load_study
     cfg = load_study(folder / "end.yaml").page("headphones").cfg
     assert (cfg["trials"], cfg["pass"], cfg["on_fail"]) == (6, 5, "end")
-    assert cfg["title"] == "Headphone check" and "headphones" in cfg["text"]
+    assert cfg["title"] == "Headphone check"
+    assert "headphones" in cfg["text"]
 
 
 def test_page_and_sounds_do_not_give_the_answer_away(folder, tmp_path):
     app = make_app(folder, tmp_path, "end")
     p, r, data, csrf, spec = walk_to_screening(app, "phpleak01", "hp-end")
     html = r.get_data(as_text=True)
-    assert len(data["videos"]) == 6 and data["play_once"] is True
-    assert "trials" not in data and "antiphase" not in html and "plain" not in html
-    assert html.count("<audio") == 6 and "Which tone was the quietest?" in html
+    assert len(data["videos"]) == 6
+    assert data["play_once"] is True
+    assert "trials" not in data
+    assert "antiphase" not in html
+    assert "plain" not in html
+    assert html.count("<audio") == 6
+    assert "Which tone was the quietest?" in html
     for k, url in enumerate(data["videos"]):
         assert url.endswith(f"/media/{data['index']}/{k}")
         snd = p.client.get(url)
-        assert snd.status_code == 200 and snd.mimetype == "audio/wav"
+        assert snd.status_code == 200
+        assert snd.mimetype == "audio/wav"
         assert snd.data == trial_wav(spec["trials"][k])
         assert snd.headers["Cache-Control"] == "private, no-store"
     part = p.client.get(data["videos"][0], headers={"Range": "bytes=0-43"})
-    assert part.status_code == 206 and part.data == trial_wav(spec["trials"][0])[:44]
+    assert part.status_code == 206
+    assert part.data == trial_wav(spec["trials"][0])[:44]
     assert p.client.get(data["videos"][0][:-1] + "6").status_code == 404
 
 
@@ -155,7 +173,8 @@ def test_every_sound_must_be_heard_to_the_end(folder, tmp_path):
     app = make_app(folder, tmp_path, "end")
     p, _, data, csrf, spec = walk_to_screening(app, "phplay001", "hp-end")
     r = p.submit(data, csrf, {"choices": n_correct_answer(spec, 6)}, played=False)
-    assert r.status_code == 422 and "please play every sound to the end" in r.get_json()["error"]
+    assert r.status_code == 422
+    assert "please play every sound to the end" in r.get_json()["error"]
 
 
 def test_five_of_six_pass_and_the_study_goes_on(folder, tmp_path):
@@ -166,17 +185,21 @@ def test_five_of_six_pass_and_the_study_goes_on(folder, tmp_path):
     assert nxt["index"] == data["index"] + 1
     with store_of(app).Session() as db:
         sess = db.get(ParticipantSession, p.sid)
-        assert sess.status == "active" and sess.failed_checks == 0
+        assert sess.status == "active"
+        assert sess.failed_checks == 0
 
 
 def test_a_failed_screening_ends_the_session_with_the_failure_code(folder, tmp_path):
     app = make_app(folder, tmp_path, "end")
     p, _, data, csrf, spec = walk_to_screening(app, "phpfail01", "hp-end")
     r = p.submit(data, csrf, {"choices": n_correct_answer(spec, 4)})
-    assert r.status_code == 200 and r.get_json()["session_status"] == "failed"
+    assert r.status_code == 200
+    assert r.get_json()["session_status"] == "failed"
     page, nothing, _ = p.page()
     html = page.get_data(as_text=True)
-    assert nothing is None and "not listening over" in html and "FAIL5678" in html
+    assert nothing is None
+    assert "not listening over" in html
+    assert "FAIL5678" in html
     with store_of(app).Session() as db:
         sess = db.get(ParticipantSession, p.sid)
         assert (sess.status, sess.end_reason) == ("failed", "headphone_check")
@@ -188,7 +211,8 @@ def test_a_failed_screening_ends_the_session_with_the_failure_code(folder, tmp_p
     stored = [a["data"] for a in raw["answers"] if a["page"] == "headphones"]
     assert stored == [{"choices": n_correct_answer(spec, 4), "correct": 4, "passed": False}]
     admin = client.get("/admin/", headers=auth).get_data(as_text=True)
-    assert "phpfail01" in admin and "headphone_check" in admin
+    assert "phpfail01" in admin
+    assert "headphone_check" in admin
     # a second try is refused
     again = h.Participant(app.test_client(), "phpfail01", "hp-end").enter()
     assert again.status_code == 409
@@ -203,7 +227,8 @@ def test_on_fail_continue_only_records_the_outcome(folder, tmp_path):
     auth = {"Authorization": f"Bearer {h.ADMIN}"}
     raw = json.loads(client.get("/admin/export/raw.json", headers=auth).get_data(as_text=True))
     stored = [a["data"] for a in raw["answers"] if a["page"] == "headphones"]
-    assert stored[0]["correct"] == 0 and stored[0]["passed"] is False
+    assert stored[0]["correct"] == 0
+    assert stored[0]["passed"] is False
     # results.csv holds judgements only: no screening rows
     rows = list(csv.DictReader(io.StringIO(client.get("/admin/export/results.csv", headers=auth)
                                            .get_data(as_text=True))))

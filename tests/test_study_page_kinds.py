@@ -8,8 +8,8 @@ import io
 from typing import Any
 
 import pytest
-
 import study_helpers as h
+
 from study_app import create_app
 from study_app.context import store_of
 from study_app.pages import BlockKind, Media, Outcome, page_kinds, register_page_kind, unregister_page_kind

@@ -65,7 +65,8 @@ def analyze(results, out_dir, study, tie_policy, ci_method, holm_per_question, a
     Wilcoxon signed-rank, Holm, significance matrix) and Likert scales (Cronbach's alpha,
     ANOVA, t-tests). Writes CSV/Markdown/LaTeX tables, PNG figures and report.html to OUT.
     """
-    from evalsuite.analysis.pipeline import AnalysisOptions, analyze as run
+    from evalsuite.analysis.pipeline import AnalysisOptions
+    from evalsuite.analysis.pipeline import analyze as run
 
     if not results.is_file():
         raise InputError("file not found (expected a results.csv or battles CSV)", path=results)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import os
 import pathlib
+from typing import NoReturn
 
 import numpy as np
 import pandas as pd
@@ -33,7 +34,7 @@ STRENGTHS = ("", "weak", "strong")
 ROLES = ("", "reference", "anchor")
 
 
-def _fail(message, path, line=None, field=None):
+def _fail(message, path, line=None, field=None) -> NoReturn:
     raise InputError(message, path=path, line=line, field=field)
 
 

@@ -10,6 +10,7 @@ import base64
 import html
 import math
 import pathlib
+from typing import Any
 
 import matplotlib
 
@@ -136,7 +137,8 @@ def fig_ratings(mu: pd.DataFrame, question: str):
     pos = np.arange(1, len(order) + 1)
     vio = [d if d.size > 1 else np.r_[d, d + 1e-9] for d in data]
     parts = ax.violinplot(vio, positions=pos, showextrema=False, widths=0.85)
-    for b in parts["bodies"]:
+    bodies: Any = parts["bodies"]
+    for b in bodies:
         b.set_facecolor("#9ecae1")
         b.set_alpha(0.6)
     ax.boxplot(data, positions=pos, widths=0.25, showfliers=True, medianprops={"color": "black"})

@@ -7,7 +7,6 @@ import pathlib
 import numpy as np
 
 from evalsuite import hashing
-from evalsuite.errors import InputError
 from evalsuite.motion import Motion
 from evalsuite.motion.io import list_motion_files, load_motion_folder
 

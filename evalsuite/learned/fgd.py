@@ -222,7 +222,7 @@ def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FrechetWarning)
         ref_stats = gaussian_stats(ref_feat)
-    raw_ref = RawReference(ref.raw) if raw else None
+    raw_ref = RawReference(ref.raw) if raw and ref.raw is not None else None
     rows = []
     for name in tqdm(list(conditions), desc="FGD", unit="condition", disable=not progress, leave=False):
         cond = WindowSet(model, conditions[name], raw=raw, label=str(name))
@@ -235,7 +235,7 @@ def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True
         ci = bootstrap_fd(ref.features, cond.features, n_bootstrap=n_bootstrap, unit=bootstrap_unit,
                           seed=seed, ci_level=ci_level)
         rows.append(_row(name, "fgd", value, FEATURE_UNIT, ci, model, model.window, ref.n_windows, cond.n_windows))
-        if raw:
+        if raw_ref is not None and cond.raw is not None:
             rows.append(_row(name, "fgd_raw", raw_ref.distance(cond.raw)["value"], RAW_UNIT, (math.nan, math.nan),
                              model, model.window, ref.n_windows, cond.n_windows))
     return rows

@@ -122,7 +122,7 @@ def import_checkpoint(checkpoint, *, joints, stats=None, fps: float = 30.0, stri
     if window_rule not in WINDOW_RULES:
         raise InputError(f"unknown window rule {window_rule!r}; expected one of {', '.join(WINDOW_RULES)}")
     names, preset_convention = resolve_joint_spec(joints)
-    rep = {"kind": representation, "joints": names, "convention": convention or preset_convention}
+    rep: dict[str, object] = {"kind": representation, "joints": names, "convention": convention or preset_convention}
     if representation == "bone_directions":
         if bones is None:
             if len(names) != 10:

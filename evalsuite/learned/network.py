@@ -62,9 +62,9 @@ class Architecture:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Architecture":
+    def from_dict(cls, d: dict) -> Architecture:
         return cls(pose_dim=int(d["pose_dim"]), window=int(d["window"]),
-                   conv_channels=tuple(int(c) for c in d["conv_channels"]), fc_slope=float(d["fc_slope"]),
+                   conv_channels=(int(d["conv_channels"][0]), int(d["conv_channels"][1])), fc_slope=float(d["fc_slope"]),
                    variational_head=bool(d["variational_head"]), decoder_hidden=int(d["decoder_hidden"]))
 
 

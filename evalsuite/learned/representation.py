@@ -35,7 +35,8 @@ def with_convention(motion: Motion, convention: str | None) -> Motion:
     conv = CONVENTIONS[convention]
     if motion.root_offset == conv["root_offset"] and motion.joint_translation == conv["joint_translation"]:
         return motion
-    return Motion(motion.skeleton, motion.values, motion.fps, name=motion.name, source=motion.source, **conv)
+    return Motion(motion.skeleton, motion.values, motion.fps, name=motion.name, source=motion.source,
+                  root_offset=conv["root_offset"], joint_translation=conv["joint_translation"])
 
 
 def joint_positions(motion: Motion, joints: list[str], fps: float, convention: str | None = None) -> np.ndarray:

@@ -96,7 +96,7 @@ def train_model(sequences, *, joints="all", window: int = 30, stride: int | None
     stride = int(stride or max(window // 2, 1))
     names, preset_convention = resolve_joint_spec(joints, items[0][1].joint_names)
     convention = convention or preset_convention
-    rep = {"kind": representation, "joints": names, "convention": convention}
+    rep: dict[str, object] = {"kind": representation, "joints": names, "convention": convention}
     if representation == "bone_directions":
         rep["bones"] = [list(b) for b in (bones or default_bones(items[0][1], names))]
 

@@ -16,19 +16,40 @@ registered in :mod:`evalsuite.metrics.families` (add one with :func:`register_fa
 
 Positions are world positions ``(T, J, 3)`` in file units (``Motion.positions()``).
 """
-from evalsuite.metrics.beats import (audio_onsets, beat_alignment, beat_alignment_score, motion_beats,
-                                     onset_strength, read_wav)
+from evalsuite.metrics.beats import (
+                                     audio_onsets,
+                                     beat_alignment,
+                                     beat_alignment_score,
+                                     motion_beats,
+                                     onset_strength,
+                                     read_wav,
+)
 from evalsuite.metrics.cca import CCAModel, canonical_correlation, cca_fit, cca_score
 from evalsuite.metrics.conventions import CONVENTIONS, Convention, get_convention
 from evalsuite.metrics.distribution import div_k, fd_g, fd_k, l1div
 from evalsuite.metrics.families import MetricFamily, MetricInfo, register_family
-from evalsuite.metrics.frechet import (FrechetWarning, frechet_distance, frechet_distance_details,
-                                       frechet_distance_samples, gaussian_stats)
+from evalsuite.metrics.frechet import (
+                                     FrechetWarning,
+                                     frechet_distance,
+                                     frechet_distance_details,
+                                     frechet_distance_samples,
+                                     gaussian_stats,
+)
 from evalsuite.metrics.histograms import clipped_fraction, hellinger_distance, joint_histograms
-from evalsuite.metrics.kinematics import (across_sequences, average_acceleration, average_jerk, average_speed,
-                                          derivative_norms, sequence_means)
-from evalsuite.metrics.pose_errors import (LengthMismatchWarning, align_lengths, average_position_error,
-                                           mean_absolute_error)
+from evalsuite.metrics.kinematics import (
+                                     across_sequences,
+                                     average_acceleration,
+                                     average_jerk,
+                                     average_speed,
+                                     derivative_norms,
+                                     sequence_means,
+)
+from evalsuite.metrics.pose_errors import (
+                                     LengthMismatchWarning,
+                                     align_lengths,
+                                     average_position_error,
+                                     mean_absolute_error,
+)
 
 __all__ = [
     "audio_onsets", "beat_alignment", "beat_alignment_score", "motion_beats", "onset_strength", "read_wav",

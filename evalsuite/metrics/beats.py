@@ -23,13 +23,10 @@ AIST++/Bailando σ of 3 frames does).
 """
 from __future__ import annotations
 
-import pathlib
-
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import find_peaks, stft
 
-from evalsuite.errors import InputError
 from evalsuite.metrics._validate import positions_array, positive
 
 __all__ = ["read_wav", "onset_strength", "audio_onsets", "motion_beats", "beat_alignment_score",
@@ -38,7 +35,8 @@ __all__ = ["read_wav", "onset_strength", "audio_onsets", "motion_beats", "beat_a
 
 def read_wav(path) -> tuple[np.ndarray, int]:
     """Mono float signal in [-1, 1) and its sample rate (:func:`evalsuite.audio.read_wav`, channels averaged)."""
-    from evalsuite.audio import read_wav as read, to_mono
+    from evalsuite.audio import read_wav as read
+    from evalsuite.audio import to_mono
 
     samples, rate = read(path)
     return to_mono(samples), rate

@@ -50,7 +50,7 @@ class Convention:
 
     name: str
     description: str
-    time_scale: object = "data"
+    time_scale: str | float = "data"
     speed_bins: tuple[float, float] | None = None
     acceleration_bins: tuple[float, float] | None = None
     overflow: bool = True

@@ -53,9 +53,9 @@ def build_conditions(out_dir: pathlib.Path, seed: int = 0) -> dict[str, pathlib.
 
 
 def run(out_dir: pathlib.Path, echo) -> None:
+    from evalsuite.metrics.engine import score_folders
     from evalsuite.metrics.figures import write_figures
     from evalsuite.metrics.report import format_table, summary_frame, write_outputs
-    from evalsuite.metrics.engine import score_folders
 
     folders = build_conditions(out_dir)
     echo(f"  conditions written to {out_dir / 'conditions'}: {', '.join(folders)} "

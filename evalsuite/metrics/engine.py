@@ -26,7 +26,13 @@ from evalsuite.hashing import file_sha256
 from evalsuite.metrics.beats import audio_onsets
 from evalsuite.metrics.conventions import Convention, get_convention, reference_edges
 from evalsuite.metrics.families import (
-    MetricFamily, ReduceContext, SequenceContext, bootstrap_weights, metric_index, registered_families)
+    MetricFamily,
+    ReduceContext,
+    SequenceContext,
+    bootstrap_weights,
+    metric_index,
+    registered_families,
+)
 from evalsuite.metrics.histograms import automatic_edges
 from evalsuite.metrics.planning import DEFAULT_GROUPS, Plan, plan_scoring, resolve_groups, resolve_metrics
 from evalsuite.metrics.tracks import wrist_track

@@ -14,6 +14,8 @@ import pathlib
 
 import numpy as np
 
+from evalsuite.metrics.engine import ScoreResult
+
 __all__ = ["histogram_figures", "wrist_distribution_figure", "write_figures"]
 
 
@@ -33,7 +35,7 @@ def _save(fig, base: pathlib.Path) -> list[pathlib.Path]:
     return paths
 
 
-def histogram_figures(result: dict, out_dir) -> list[pathlib.Path]:
+def histogram_figures(result: ScoreResult, out_dir) -> list[pathlib.Path]:
     plt = _plt()
     out = pathlib.Path(out_dir)
     setup, conv, plan = result.setup, result.convention, result.plan
@@ -65,7 +67,7 @@ def histogram_figures(result: dict, out_dir) -> list[pathlib.Path]:
     return paths
 
 
-def wrist_distribution_figure(result: dict, out_dir) -> list[pathlib.Path]:
+def wrist_distribution_figure(result: ScoreResult, out_dir) -> list[pathlib.Path]:
     plt = _plt()
     plan = result.plan
     tracks = {c: np.concatenate([t.reshape(-1, 3) for t, _ in ts]) for c, ts in result.wrist_tracks.items() if ts}
@@ -104,7 +106,7 @@ def wrist_distribution_figure(result: dict, out_dir) -> list[pathlib.Path]:
     return paths
 
 
-def write_figures(result: dict, out_dir) -> list[pathlib.Path]:
+def write_figures(result: ScoreResult, out_dir) -> list[pathlib.Path]:
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return histogram_figures(result, out) + wrist_distribution_figure(result, out)

@@ -82,10 +82,10 @@ def parse_condition(item: str | pathlib.Path, default_name: str | None = None) -
     """``"name=path"`` or ``"path"`` (the name is the folder name)."""
     text = str(item)
     if "=" in text and not pathlib.Path(text).exists():
-        name, _, path = text.partition("=")
-        if not name or not path:
+        name, _, folder = text.partition("=")
+        if not name or not folder:
             raise InputError(f"expected NAME=FOLDER or FOLDER, got {text!r}", field="condition")
-        return name, pathlib.Path(path)
+        return name, pathlib.Path(folder)
     path = pathlib.Path(text)
     return default_name or path.resolve().name, path
 

@@ -154,7 +154,7 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
                 raise tokens.error(f"expected OFFSET, CHANNELS, JOINT, End Site or '}}' in joint {name!r}, "
                                    f"found {tok!r}", line)
 
-    while tokens.peek() is not None and tokens.peek().upper() == "ROOT":
+    while (peeked := tokens.peek()) is not None and peeked.upper() == "ROOT":
         _, line = tokens.next("ROOT")
         joint(-1, line)
     if not names:
@@ -162,7 +162,8 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
         raise tokens.error("expected ROOT after HIERARCHY" + (f", found {tok!r}" if tok else ""))
     if tokens.peek() is not None:
         raise tokens.error(f"expected MOTION or another ROOT after the hierarchy, found {tokens.peek()!r}")
-    return Skeleton(names, parents, offsets, channels, end_parents, end_offsets)
+    return Skeleton(names, np.asarray(parents, dtype=np.int64), np.asarray(offsets, dtype=np.float64), channels,
+                    np.asarray(end_parents, dtype=np.int64), np.asarray(end_offsets, dtype=np.float64).reshape(-1, 3))
 
 
 def _read_text(path: str, data: bytes) -> str:
@@ -315,7 +316,7 @@ def parse_bvh(data: bytes | str, path: str = "<string>"):
     body = rest[pos:]
     nul = body.find(b"\x00")
     if nul >= 0:
-        raise BVHError(f"binary data (NUL byte) in the frame data; expected text", path=path,
+        raise BVHError("binary data (NUL byte) in the frame data; expected text", path=path,
                        line=time_line + 1 + body.count(b"\n", 0, nul))
     if skeleton.n_channels == 0:
         # No channels: frame lines are empty, so only stray content can be wrong.
@@ -356,11 +357,11 @@ def format_bvh(skeleton: Skeleton, values: np.ndarray, frame_time: float, precis
         raise ValueError(f"values must have shape (T, {skeleton.n_channels}), got {values.shape}")
     out = io.StringIO()
     out.write("HIERARCHY\n")
-    children = {j: [] for j in range(skeleton.n_joints)}
+    children: dict[int, list[int]] = {j: [] for j in range(skeleton.n_joints)}
     for j, p in enumerate(skeleton.parents):
         if p >= 0:
             children[int(p)].append(j)
-    ends = {j: [] for j in range(skeleton.n_joints)}
+    ends: dict[int, list[int]] = {j: [] for j in range(skeleton.n_joints)}
     for e, p in enumerate(skeleton.end_site_parents):
         ends[int(p)].append(e)
 

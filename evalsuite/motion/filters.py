@@ -5,6 +5,8 @@
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_filter
@@ -60,7 +62,8 @@ def one_euro(x: np.ndarray, fps: float, min_cutoff: float = 1.0, beta: float = 0
     return out
 
 
-FILTERS = {"moving_average": moving_average, "savgol": savgol, "one_euro": one_euro}
+FILTERS: dict[str, Callable[..., np.ndarray]] = {"moving_average": moving_average, "savgol": savgol,
+                                                  "one_euro": one_euro}
 
 
 def smooth(motion, method: str = "moving_average", **params):

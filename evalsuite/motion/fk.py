@@ -61,9 +61,9 @@ def local_rotation_elements(skeleton: Skeleton, values: np.ndarray) -> list:
             for j, _ in members:
                 result[j] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
             continue
-        cols = np.array([c for _, c in members], dtype=np.int64)  # (Jg, len(axes))
+        col_table = np.array([c for _, c in members], dtype=np.int64)  # (Jg, len(axes))
         # (len(axes), Jg, T): one contiguous row per joint keeps the later per-joint work fast.
-        angles = values[:, cols.T.ravel()].T.reshape(len(axes), len(members), -1)
+        angles = values[:, col_table.T.ravel()].T.reshape(len(axes), len(members), -1)
         elements = euler_to_matrix_elements(angles, axes, degrees=True)
         for g, (j, _) in enumerate(members):
             result[j] = [e if isinstance(e, float) else e[g] for e in elements]
@@ -139,11 +139,11 @@ def forward_kinematics(skeleton: Skeleton, values: np.ndarray, *, root_offset: s
         block = values[start:start + block_frames]
         pos, rot = _fk_block(skeleton, block, root_offset, joint_translation, end_sites, world_rotations)
         positions[start:start + len(block)] = pos.transpose(2, 0, 1)
-        if world_rotations:
+        if rotations is not None:
             for j, elements in enumerate(rot):
                 for k, e in enumerate(elements):
                     rotations[start:start + len(block), j, k] = e
-    if not world_rotations:
+    if rotations is None:
         return positions
     return positions, rotations.reshape(n_frames, n_joints, 3, 3)
 

@@ -65,7 +65,8 @@ def load_motion(path, *, fps: float | None = None, joint_names=None, parents=Non
         if fps is not None and abs(fps - file_fps) > 1e-6 * file_fps:
             raise InputError(f"fps {fps:g} was given but the file says {file_fps:g} (Frame Time {frame_time:g}); "
                              "use evalsuite.motion.ops.resample to change the frame rate", path=path)
-        return Motion(skeleton, values, file_fps, name=path.stem, source=os.fspath(path), **conv)
+        return Motion(skeleton, values, file_fps, name=path.stem, source=os.fspath(path),
+                      root_offset=conv["root_offset"], joint_translation=conv["joint_translation"])
     if suffix == ".npz":
         return _load_npz(path, fps, joint_names, parents, fallback_fps)
     if suffix == ".npy":

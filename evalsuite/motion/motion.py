@@ -59,7 +59,8 @@ class Motion:
             positions = np.asarray(positions, dtype=np.float64)
             if positions.ndim != 3 or positions.shape[1:] != (skeleton.n_joints, 3):
                 raise MotionError(f"positions must have shape (T, {skeleton.n_joints}, 3), got {positions.shape}")
-            self.values = None
+            # positional motion has no channel values (is_hierarchical is False)
+            self.values = None  # type: ignore[assignment]
             self._positions = positions
         self._cache: dict = {}
 
@@ -81,13 +82,13 @@ class Motion:
         skeleton = Skeleton(joint_names, parents, np.zeros((len(joint_names), 3)), [()] * len(joint_names))
         return cls(skeleton, None, fps, positions=positions, name=name, source=source)
 
-    def with_values(self, values: np.ndarray, fps: float | None = None, skeleton: Skeleton | None = None) -> "Motion":
+    def with_values(self, values: np.ndarray, fps: float | None = None, skeleton: Skeleton | None = None) -> Motion:
         """A hierarchical motion like this one with other channel values."""
         return Motion(skeleton or self.skeleton, values, fps or self.fps, root_offset=self.root_offset,
                       joint_translation=self.joint_translation, name=self.name, source=self.source)
 
     def with_positions(self, positions: np.ndarray, fps: float | None = None, joint_names=None,
-                       parents=None) -> "Motion":
+                       parents=None) -> Motion:
         """A positional motion with these positions (joint names/parents kept unless given)."""
         names = list(joint_names) if joint_names is not None else self.joint_names
         par = parents if parents is not None else (self.parents if joint_names is None else None)

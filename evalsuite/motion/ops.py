@@ -72,7 +72,8 @@ def _prune(motion: Motion, keep: list[int]) -> Motion:
             end_parents.append(index[j])
             end_offsets.append(sk.offsets[lost[0]])
     order = np.argsort(end_parents, kind="stable")
-    new = Skeleton([sk.names[j] for j in keep], [index[sk.parents[j]] if sk.parents[j] >= 0 else -1 for j in keep],
+    new = Skeleton([sk.names[j] for j in keep],
+                   np.asarray([index[sk.parents[j]] if sk.parents[j] >= 0 else -1 for j in keep], dtype=np.int64),
                    sk.offsets[keep], [sk.channels[j] for j in keep],
                    np.asarray(end_parents, dtype=np.int64)[order], np.asarray(end_offsets).reshape(-1, 3)[order])
     return motion.with_values(motion.values[:, cols], skeleton=new)

@@ -69,7 +69,8 @@ class Skeleton:
     @property
     def end_site_names(self) -> list[str]:
         """End Sites are named ``<parent>_End`` (``_End2``, ... when a joint has several)."""
-        names, seen = [], {}
+        names: list[str] = []
+        seen: dict[int, int] = {}
         for p in self.end_site_parents:
             k = seen.get(int(p), 0) + 1
             seen[int(p)] = k
@@ -99,7 +100,7 @@ class Skeleton:
             d[j] = 0 if p < 0 else d[p] + 1
         return d
 
-    def copy(self) -> "Skeleton":
+    def copy(self) -> Skeleton:
         return Skeleton(list(self.names), self.parents.copy(), self.offsets.copy(), list(self.channels),
                         self.end_site_parents.copy(), self.end_site_offsets.copy())
 

@@ -70,7 +70,8 @@ def humanoid_skeleton(n_joints: int = 60, rotation_order: str = "ZXY") -> Skelet
     parents = [-1 if p is None else p for p in parents]
     leaf = [j for j in range(len(names)) if j not in parents]
     end_offsets = [np.asarray(offsets[j]) * 0.5 for j in leaf]
-    return Skeleton(names, parents, offsets, channels, leaf, end_offsets)
+    return Skeleton(names, np.asarray(parents, dtype=np.int64), np.asarray(offsets, dtype=np.float64), channels,
+                    np.asarray(leaf, dtype=np.int64), np.asarray(end_offsets, dtype=np.float64).reshape(-1, 3))
 
 
 def synthetic_motion(n_joints: int = 60, fps: float = 60.0, seconds: float = 60.0, seed: int = 0,

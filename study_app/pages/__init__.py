@@ -12,7 +12,7 @@ import pathlib
 from study_app.pages.base import BlockKind, Media, Outcome, PageKind
 
 __all__ = ["PageKind", "BlockKind", "Outcome", "Media", "register_page_kind", "unregister_page_kind",
-           "get_kind", "page_kinds", "TEMPLATE_FOLDER"]
+           "get_kind", "get_block_kind", "page_kinds", "TEMPLATE_FOLDER"]
 
 TEMPLATE_FOLDER = pathlib.Path(__file__).resolve().parent.parent / "templates" / "pages"
 _KINDS: dict[str, PageKind] = {}
@@ -40,9 +40,26 @@ def get_kind(name: str) -> PageKind:
     return _KINDS[name]
 
 
+def get_block_kind(name: str) -> BlockKind:
+    """The kind of a rating block's pages (TypeError for a kind that is not a block)."""
+    kind = _KINDS[name]
+    if not isinstance(kind, BlockKind):
+        raise TypeError(f"page kind {name!r} is not a rating block")
+    return kind
+
+
 def _register_builtins() -> None:
-    from study_app.pages import (consent, finish, headphone_check, instructions, likert, mushra, pairwise,
-                                 questionnaire, training)
+    from study_app.pages import (
+        consent,
+        finish,
+        headphone_check,
+        instructions,
+        likert,
+        mushra,
+        pairwise,
+        questionnaire,
+        training,
+    )
 
     for module in (consent, instructions, questionnaire, headphone_check, training, pairwise, mushra,
                    likert, finish):

@@ -77,7 +77,7 @@ class PairwiseKind(BlockKind):
 
     def attention_fits(self, stim: Any, cfg: dict) -> bool:
         m = PAIRWISE_EXPECTED_RE.match(stim.expected)
-        return bool(m) and not (m.group(2) and cfg["levels"] == 3)
+        return m is not None and not (m.group(2) and cfg["levels"] == 3)
 
     def regular_page(self, block: Any, g: int, lookup: Any, segments: list[str]) -> dict:
         cfg = block.cfg

@@ -101,6 +101,8 @@ class MotionDAE(nn.Module):
 
     Inputs are standardised to mean 0 and maximum absolute value 1 (paper §4.2), so tanh can reach them."""
 
+    feature_std: torch.Tensor
+
     def __init__(self, pose_dim: int, code_dim: int, noise: float = 0.05):
         super().__init__()
         self.encoder = nn.Linear(pose_dim, code_dim)

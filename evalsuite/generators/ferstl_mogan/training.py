@@ -24,7 +24,12 @@ import torch
 from torch import nn
 
 from evalsuite.generators.ferstl_mogan.net import (
-    Generator, MinibatchDiscriminator, MoganConfig, PhaseClassifier, SequenceDiscriminator)
+    Generator,
+    MinibatchDiscriminator,
+    MoganConfig,
+    PhaseClassifier,
+    SequenceDiscriminator,
+)
 
 __all__ = ["MoganStages", "TrainedMogan", "train_mogan", "generate_mogan", "weighted_f1", "WEIGHTS"]
 

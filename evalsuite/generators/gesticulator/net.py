@@ -72,6 +72,8 @@ class GesticulatorConfig:
 class GesticulatorNet(nn.Module):
     """speech window (B, W, A+X) and previous poses (B, P, D) -> pose (B, D)."""
 
+    input_mask: torch.Tensor
+
     def __init__(self, config: GesticulatorConfig):
         super().__init__()
         self.config = c = config

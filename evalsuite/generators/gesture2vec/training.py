@@ -14,7 +14,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from evalsuite.generators.gesture2vec.net import FrameDAE, G2VConfig, Translator, VQDVAE
+from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
 
 __all__ = ["G2VStages", "TrainedG2V", "train_gesture2vec", "generate_gesture2vec", "code_perplexity",
            "WordTrack"]
@@ -150,7 +150,9 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     vq.eval()
     # 3. translation: word windows -> codes of the window's non-overlapping chunks
     win = config.chunk * config.chunks_per_window
-    srcs, tgts, train_chunks = [], [], {}
+    srcs: list[np.ndarray] = []
+    tgts: list[np.ndarray] = []
+    train_chunks: dict[int, list[np.ndarray]] = {}
     with torch.no_grad():
         for lat, track, p in zip(latents, words, norm):
             for s in range(0, len(lat) - win + 1, config.chunk):

@@ -8,8 +8,14 @@ from __future__ import annotations
 
 from evalsuite.errors import InputError
 from evalsuite.metrics.families.base import (
-    MetricFamily, MetricInfo, ReduceContext, SequenceContext, bootstrap_weights, percentile_ci,
-    weighted_mean_boot)
+    MetricFamily,
+    MetricInfo,
+    ReduceContext,
+    SequenceContext,
+    bootstrap_weights,
+    percentile_ci,
+    weighted_mean_boot,
+)
 
 __all__ = ["MetricFamily", "MetricInfo", "SequenceContext", "ReduceContext", "register_family",
            "unregister_family", "get_family", "registered_families", "metric_index", "bootstrap_weights",

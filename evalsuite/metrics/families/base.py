@@ -162,7 +162,7 @@ class ReduceContext:
         base = metric.split("[")[0]
         return self.info[base].unit_for(self.conv) if base in self.info else ""
 
-    def add(self, metric: str, value: float, std: float = NAN, n: int = 0,
+    def add(self, metric: str, value: float | np.floating | np.ndarray, std: float = NAN, n: int = 0,
             ci: tuple[float, float] = NAN_CI, unit: str | None = None, better: str | None = None) -> None:
         """One summary row (``metric`` may carry a group suffix, e.g. ``hellinger_speed[wrists]``)."""
         base = metric.split("[")[0]
@@ -173,19 +173,19 @@ class ReduceContext:
             "better": better or (self.info[base].better if base in self.info else ""),
             "convention": self.conv.name})
 
-    def sequence_rows(self, metric: str, values: Sequence[float], unit: str | None = None) -> None:
+    def sequence_rows(self, metric: str, values: Sequence[float] | np.ndarray, unit: str | None = None) -> None:
         u = unit if unit is not None else self.unit(metric)
         for s, v in zip(self.names, values):
             self.per_sequence.append({"condition": self.cond, "sequence": s, "metric": metric,
                                       "value": float(v), "unit": u})
 
-    def joint_rows(self, metric: str, values: Sequence[float], unit: str | None = None) -> None:
+    def joint_rows(self, metric: str, values: Sequence[float] | np.ndarray, unit: str | None = None) -> None:
         u = unit if unit is not None else self.unit(metric)
         for j, v in zip(self.setup.joints, values):
             self.per_joint.append({"condition": self.cond, "joint": j, "metric": metric, "value": float(v),
                                    "unit": u})
 
-    def mean_metric(self, metric: str, values: Sequence[float], unit: str | None = None) -> None:
+    def mean_metric(self, metric: str, values: Sequence[float] | np.ndarray, unit: str | None = None) -> None:
         """Per-sequence rows and a summary row: mean (and std with the convention's ddof) across sequences,
         bootstrap CI of the mean when resampling."""
         v = np.asarray(values, dtype=np.float64)

@@ -2,6 +2,8 @@
 cross-fitted over two folds of sequences (or two halves in time), or in-sample by convention."""
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from evalsuite.errors import InputError
@@ -11,7 +13,7 @@ from evalsuite.metrics.families.base import MetricFamily, MetricInfo, ReduceCont
 
 __all__ = ["CCAFamily", "FAMILY", "cca_halves"]
 
-Moments = tuple[float, np.ndarray, np.ndarray]
+Moments = tuple[Any, np.ndarray, np.ndarray]
 
 
 def _centred_halves(x: np.ndarray) -> list[tuple[int, np.ndarray, np.ndarray]]:
@@ -80,15 +82,15 @@ def _cca_value(acc: dict, dx: int, in_sample: bool, ctx: ReduceContext) -> float
     """In-sample, or cross-fitted over two folds of sequences (both ways, averaged); when a fold is empty
     (a single sequence), over the first and second halves in time."""
     try:
-        folds = [acc.get("cca_fold0"), acc.get("cca_fold1")]
+        folds: list[Any] = [acc.get("cca_fold0"), acc.get("cca_fold1")]
         if in_sample:
             whole = combine_moments([f for f in folds if f is not None])
             return float(cca_fit_moments(*whole, dx).correlation)
         if folds[0] is None or folds[1] is None:
             folds = [acc["cca_first_half"], acc["cca_second_half"]]
-        ma, mb = folds
-        scores = [cca_score_moments(cca_fit_moments(*ma, dx), *mb, dx),
-                  cca_score_moments(cca_fit_moments(*mb, dx), *ma, dx)]
+        (na, mean_a, s_a), (nb, mean_b, s_b) = folds
+        scores = [cca_score_moments(cca_fit_moments(na, mean_a, s_a, dx), nb, mean_b, s_b, dx),
+                  cca_score_moments(cca_fit_moments(nb, mean_b, s_b, dx), na, mean_a, s_a, dx)]
         return float(np.mean(scores))
     except InputError as exc:
         ctx.issues.append(f"{ctx.cond}: CCA not computed ({exc.reason})")

@@ -6,8 +6,7 @@ import warnings
 
 import numpy as np
 
-from evalsuite.metrics.distribution import (
-    combine_moments, div_k_sequence, frechet_from_moments, l1div_parts, moments)
+from evalsuite.metrics.distribution import combine_moments, div_k_sequence, frechet_from_moments, l1div_parts, moments
 from evalsuite.metrics.families.base import MetricFamily, MetricInfo, ReduceContext, SequenceContext
 from evalsuite.metrics.families.cca import cca_halves
 from evalsuite.metrics.frechet import FrechetWarning

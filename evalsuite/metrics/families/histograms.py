@@ -2,6 +2,8 @@
 (:mod:`evalsuite.metrics.histograms`), pooled over joint groups and per sequence."""
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from evalsuite.metrics.families.base import MetricFamily, MetricInfo, ReduceContext, SequenceContext
@@ -48,7 +50,7 @@ class HistogramFamily(MetricFamily):
                 metric = f"hellinger_{q}" + ("" if gname == "all" else f"[{gname}]")
                 if ctx.wants(f"hellinger_{q}"):
                     value = hellinger_rows(gc.sum(0)[use], gr.sum(0)[use])
-                    ci = ctx.boot(lambda w, gc=gc, gr=gr: hellinger_rows((w @ gc)[:, use], (w @ gr)[:, use]))
+                    ci = ctx.boot(partial(_resampled_hellinger, gc, gr, use))
                     ctx.add(metric, value, n=ctx.n, ci=ci, unit="H")
                 ctx.histograms.append({"condition": ctx.cond, "quantity": q, "group": gname, "counts": gc.sum(0)})
             if ctx.wants(f"hellinger_{q}_seq"):
@@ -56,10 +58,18 @@ class HistogramFamily(MetricFamily):
             if ctx.wants(f"clipped_{q}"):
                 tot = hc.sum(axis=1)   # (n, B+1)
                 ctx.add(f"clipped_{q}", float(clipped_fraction(tot.sum(0))), n=ctx.n,
-                        ci=ctx.boot(lambda w, tot=tot: clipped_fraction(w @ tot)), unit="fraction")
+                        ci=ctx.boot(partial(_resampled_clipped, tot)), unit="fraction")
             if ctx.wants(f"hellinger_{q}"):
-                ctx.joint_rows(f"hellinger_{q}", [hellinger_rows(hc[:, j].sum(0)[use], hr[:, j].sum(0)[use])
+                ctx.joint_rows(f"hellinger_{q}", [float(hellinger_rows(hc[:, j].sum(0)[use], hr[:, j].sum(0)[use]))
                                                   for j in range(len(setup.joints))], unit="H")
+
+
+def _resampled_hellinger(gc: np.ndarray, gr: np.ndarray, use: slice, w: np.ndarray) -> np.ndarray:
+    return hellinger_rows((w @ gc)[:, use], (w @ gr)[:, use])
+
+
+def _resampled_clipped(tot: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return clipped_fraction(w @ tot)
 
 
 FAMILY = HistogramFamily()
