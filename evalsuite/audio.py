@@ -6,6 +6,7 @@ float WAV is returned as it is. Samples are always 2-D, ``(N, C)``.
 """
 from __future__ import annotations
 
+import os
 import pathlib
 import warnings
 
@@ -16,7 +17,7 @@ from evalsuite.errors import InputError
 __all__ = ["read_wav", "write_wav", "to_mono"]
 
 
-def read_wav(path: str | pathlib.Path, *, raw: bool = False) -> tuple[np.ndarray, int]:
+def read_wav(path: str | os.PathLike[str], *, raw: bool = False) -> tuple[np.ndarray, int]:
     """``(samples (N, C), sample_rate)`` of a WAV file.
 
     ``raw=False``: float64 in [-1, 1); ``raw=True``: the file's own samples (e.g. int16), for recipes
@@ -55,7 +56,7 @@ def to_mono(samples: np.ndarray) -> np.ndarray:
     return x.mean(axis=1) if x.ndim == 2 else x
 
 
-def write_wav(path: str | pathlib.Path, samples: np.ndarray, rate: int) -> None:
+def write_wav(path: str | os.PathLike[str], samples: np.ndarray, rate: int) -> None:
     """Write 16-bit PCM: ``round(x * 32768)`` clipped to the int16 range (so :func:`read_wav` returns the
     same values for samples on the 1/32768 grid). ``samples``: ``(N,)`` or ``(N, C)`` floats in [-1, 1]."""
     from scipy.io import wavfile

@@ -4,11 +4,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.errors import InputError
 
 
-def positions_array(positions, name: str = "positions", min_frames: int = 1) -> np.ndarray:
+def positions_array(positions: npt.ArrayLike, name: str = "positions", min_frames: int = 1) -> np.ndarray:
     """A finite float64 array ``(T, J, 3)`` with at least ``min_frames`` frames."""
     try:
         arr = np.asarray(positions, dtype=np.float64)
@@ -23,7 +24,7 @@ def positions_array(positions, name: str = "positions", min_frames: int = 1) -> 
     return arr
 
 
-def samples_array(x, name: str, min_rows: int = 1) -> np.ndarray:
+def samples_array(x: npt.ArrayLike, name: str, min_rows: int = 1) -> np.ndarray:
     """A finite float64 array ``(N, D)``."""
     try:
         arr = np.asarray(x, dtype=np.float64)
@@ -38,9 +39,9 @@ def samples_array(x, name: str, min_rows: int = 1) -> np.ndarray:
     return arr
 
 
-def positive(value, name: str) -> float:
+def positive(value: object, name: str) -> float:
     try:
-        v = float(value)
+        v = float(value)  # type: ignore[arg-type]  # anything float() takes; the rest is reported below
     except (TypeError, ValueError):
         raise InputError(f"{name} must be a positive number, got {value!r}", field=name) from None
     if not (math.isfinite(v) and v > 0):

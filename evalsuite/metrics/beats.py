@@ -23,7 +23,10 @@ AIST++/Bailando σ of 3 frames does).
 """
 from __future__ import annotations
 
+import os
+
 import numpy as np
+import numpy.typing as npt
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import find_peaks, stft
 
@@ -33,7 +36,7 @@ __all__ = ["read_wav", "onset_strength", "audio_onsets", "motion_beats", "beat_a
            "beat_alignment"]
 
 
-def read_wav(path) -> tuple[np.ndarray, int]:
+def read_wav(path: str | os.PathLike[str]) -> tuple[np.ndarray, int]:
     """Mono float signal in [-1, 1) and its sample rate (:func:`evalsuite.audio.read_wav`, channels averaged)."""
     from evalsuite.audio import read_wav as read
     from evalsuite.audio import to_mono
@@ -42,7 +45,7 @@ def read_wav(path) -> tuple[np.ndarray, int]:
     return to_mono(samples), rate
 
 
-def onset_strength(signal, sr: float, frame_s: float = 0.046, hop_s: float = 0.01,
+def onset_strength(signal: npt.ArrayLike, sr: float, frame_s: float = 0.046, hop_s: float = 0.01,
                    compression: float = 100.0) -> tuple[np.ndarray, np.ndarray]:
     """Spectral-flux onset strength ``(N,)`` and the times (s) of its frames."""
     x = np.asarray(signal, dtype=np.float64).ravel()
@@ -59,7 +62,7 @@ def onset_strength(signal, sr: float, frame_s: float = 0.046, hop_s: float = 0.0
     return (flux / peak if peak > 0 else flux), times
 
 
-def audio_onsets(signal, sr: float, *, frame_s: float = 0.046, hop_s: float = 0.01,
+def audio_onsets(signal: npt.ArrayLike, sr: float, *, frame_s: float = 0.046, hop_s: float = 0.01,
                  min_interval_s: float = 0.1, delta: float = 0.07, threshold_window_s: float = 0.5) -> np.ndarray:
     """Onset times (s) by spectral-flux peak picking (see the module docstring)."""
     env, times = onset_strength(signal, sr, frame_s, hop_s)
@@ -69,10 +72,10 @@ def audio_onsets(signal, sr: float, *, frame_s: float = 0.046, hop_s: float = 0.
     window = max(1, int(round(threshold_window_s / hop)))
     threshold = uniform_filter1d(env, size=window, mode="nearest") + delta
     peaks, _ = find_peaks(env, height=threshold, distance=max(1, int(round(min_interval_s / hop))))
-    return times[peaks]
+    return np.asarray(times[peaks])
 
 
-def motion_beats(positions, fps: float, *, min_interval_s: float = 0.2, prominence: float = 0.1,
+def motion_beats(positions: npt.ArrayLike, fps: float, *, min_interval_s: float = 0.2, prominence: float = 0.1,
                  smooth_s: float = 0.0) -> np.ndarray:
     """Motion beat times (s): local minima of the mean joint speed ``(T, J, 3)`` -> ``(K,)``.
 
@@ -92,10 +95,10 @@ def motion_beats(positions, fps: float, *, min_interval_s: float = 0.2, prominen
         return np.zeros(0)  # no motion, no beats
     minima, _ = find_peaks(-speed, distance=max(1, int(round(min_interval_s * fps))),
                            prominence=prominence * scale)
-    return (minima + 0.5) / fps
+    return np.asarray((minima + 0.5) / fps)
 
 
-def beat_alignment_score(source_beats, target_beats, sigma: float = 0.1) -> float:
+def beat_alignment_score(source_beats: npt.ArrayLike, target_beats: npt.ArrayLike, sigma: float = 0.1) -> float:
     """Mean over source beats of ``exp(-d²/(2σ²))``, d = distance (s) to the nearest target beat."""
     sigma = positive(sigma, "sigma")
     src = np.sort(np.asarray(source_beats, dtype=np.float64).ravel())
@@ -111,7 +114,7 @@ def beat_alignment_score(source_beats, target_beats, sigma: float = 0.1) -> floa
     return float(np.mean(np.exp(-(d ** 2) / (2 * sigma ** 2))))
 
 
-def beat_alignment(audio_beats, motion_beat_times, sigma: float = 0.1) -> dict:
+def beat_alignment(audio_beats: npt.ArrayLike, motion_beat_times: npt.ArrayLike, sigma: float = 0.1) -> dict[str, float]:
     """Both directions: ``{"a2m": audio onsets -> motion beats, "m2a": motion beats -> audio onsets}``."""
     return {"a2m": beat_alignment_score(audio_beats, motion_beat_times, sigma),
             "m2a": beat_alignment_score(motion_beat_times, audio_beats, sigma)}

@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.errors import InputError
 from evalsuite.metrics._validate import samples_array
@@ -55,10 +56,10 @@ def _inv_sqrt(c: np.ndarray) -> np.ndarray:
     if not ok.any():
         raise InputError("the motion has no variance to correlate (static pose?)", field="cca")
     v = v[:, ok]
-    return (v / np.sqrt(w[ok])) @ v.T
+    return np.asarray((v / np.sqrt(w[ok])) @ v.T)
 
 
-def cca_fit_moments(n, mean, scatter, dx: int) -> CCAModel:
+def cca_fit_moments(n: float, mean: np.ndarray, scatter: np.ndarray, dx: int) -> CCAModel:
     """Fit the first canonical pair from moments of stacked samples ``z = [x; y]`` (``dx`` dims of x)."""
     if n < 3:
         raise InputError(f"CCA needs at least 3 frames, got {n}", field="cca")
@@ -77,7 +78,7 @@ def cca_fit_moments(n, mean, scatter, dx: int) -> CCAModel:
     return CCAModel(keep_x, keep_y, wx @ u[:, 0], wy @ vt[0], mean[ix], mean[iy], float(min(s[0], 1.0)))
 
 
-def cca_score_moments(model: CCAModel, n, mean, scatter, dx: int) -> float:
+def cca_score_moments(model: CCAModel, n: float, mean: np.ndarray, scatter: np.ndarray, dx: int) -> float:
     """Correlation of the model's projections on data given by moments of ``z = [x; y]``."""
     ix, iy = model.keep_x, dx + model.keep_y
     c = scatter
@@ -89,7 +90,7 @@ def cca_score_moments(model: CCAModel, n, mean, scatter, dx: int) -> float:
     return float(sxy / np.sqrt(sxx * syy))
 
 
-def _stacked(x, y):
+def _stacked(x: npt.ArrayLike, y: npt.ArrayLike) -> tuple[float, np.ndarray, np.ndarray, int]:
     x = samples_array(x, "x", min_rows=3)
     y = samples_array(y, "y", min_rows=3)
     if len(x) != len(y):
@@ -100,13 +101,13 @@ def _stacked(x, y):
     return len(z), mean, c.T @ c, x.shape[1]
 
 
-def cca_fit(x, y) -> CCAModel:
+def cca_fit(x: npt.ArrayLike, y: npt.ArrayLike) -> CCAModel:
     """Fit the first canonical pair on time-aligned frames ``x (N, Dx)``, ``y (N, Dy)``."""
     n, mean, scatter, dx = _stacked(x, y)
     return cca_fit_moments(n, mean, scatter, dx)
 
 
-def cca_score(model: CCAModel, x, y) -> float:
+def cca_score(model: CCAModel, x: npt.ArrayLike, y: npt.ArrayLike) -> float:
     """Pearson correlation of ``a^T x`` and ``b^T y`` on (held-out) time-aligned frames."""
     n, mean, scatter, dx = _stacked(x, y)
     if dx != model.mean_x.size and dx <= model.keep_x.max(initial=0):
@@ -114,6 +115,6 @@ def cca_score(model: CCAModel, x, y) -> float:
     return cca_score_moments(model, n, mean, scatter, dx)
 
 
-def canonical_correlation(x, y) -> float:
+def canonical_correlation(x: npt.ArrayLike, y: npt.ArrayLike) -> float:
     """In-sample first canonical correlation (what the GENEA scripts report)."""
     return cca_fit(x, y).correlation

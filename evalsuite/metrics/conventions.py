@@ -105,7 +105,7 @@ CONVENTIONS: dict[str, Convention] = {
 }
 
 
-def get_convention(name) -> Convention:
+def get_convention(name: str | Convention) -> Convention:
     """A convention by name (or the Convention itself)."""
     if isinstance(name, Convention):
         return name

@@ -13,11 +13,13 @@ Conditions, each a folder ``out_dir/conditions/<name>/seg0N.bvh`` with the same 
 from __future__ import annotations
 
 import pathlib
+from collections.abc import Callable
 
 import numpy as np
 
 from evalsuite.motion.filters import smooth
 from evalsuite.motion.io import load_motion, save_motion
+from evalsuite.motion.motion import Motion
 from evalsuite.motion.ops import cut
 from evalsuite.motion.samples import sample_path
 
@@ -33,7 +35,7 @@ def build_conditions(out_dir: pathlib.Path, seed: int = 0) -> dict[str, pathlib.
     rot_cols = [i for i, c in enumerate(source.skeleton.channel_names()) if c.endswith("rotation")]
     folders = {}
 
-    def write(cond, k, motion):
+    def write(cond: str, k: int, motion: Motion) -> None:
         folder = out_dir / "conditions" / cond
         folder.mkdir(parents=True, exist_ok=True)
         save_motion(motion, folder / f"seg{k:02d}.bvh")
@@ -52,7 +54,7 @@ def build_conditions(out_dir: pathlib.Path, seed: int = 0) -> dict[str, pathlib.
     return folders
 
 
-def run(out_dir: pathlib.Path, echo) -> None:
+def run(out_dir: pathlib.Path, echo: Callable[[str], None]) -> None:
     from evalsuite.metrics.engine import score_folders
     from evalsuite.metrics.figures import write_figures
     from evalsuite.metrics.report import format_table, summary_frame, write_outputs

@@ -18,7 +18,11 @@ never need all frames in memory.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import Any
+
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.errors import InputError
 from evalsuite.metrics._validate import positions_array, samples_array
@@ -28,13 +32,17 @@ __all__ = ["fd_g", "fd_k", "l1div", "div_k", "moments", "combine_moments", "mome
            "frechet_from_moments", "pose_vectors"]
 
 
-def pose_vectors(positions) -> np.ndarray:
+# (count, mean (D,), scatter (D, D)) of a sample set
+Moments = tuple[Any, np.ndarray, np.ndarray]
+
+
+def pose_vectors(positions: npt.ArrayLike) -> np.ndarray:
     """``(T, J, 3)`` -> ``(T, 3J)`` pose vectors."""
     x = positions_array(positions)
     return x.reshape(len(x), -1)
 
 
-def _sequences(seqs, name):
+def _sequences(seqs: Any, name: str) -> list[np.ndarray]:
     if isinstance(seqs, np.ndarray) and seqs.ndim == 3:
         seqs = [seqs]
     seqs = [pose_vectors(s) for s in seqs]
@@ -44,10 +52,10 @@ def _sequences(seqs, name):
     if len(dims) != 1:
         raise InputError(f"{name}: sequences have different joint counts ({sorted(d // 3 for d in dims)})",
                          field=name)
-    return seqs
+    return list(seqs)
 
 
-def fd_g(natural, generated) -> float:
+def fd_g(natural: Any, generated: Any) -> float:
     """FD_g: Fréchet distance of raw pose vectors pooled over all frames (units²).
 
     ``natural``/``generated``: a ``(T, J, 3)`` array or a list of them (one per sequence).
@@ -59,7 +67,7 @@ def fd_g(natural, generated) -> float:
     return frechet_distance_samples(a, b)
 
 
-def fd_k(natural, generated) -> float:
+def fd_k(natural: Any, generated: Any) -> float:
     """FD_k: Fréchet distance of frame differences ``p_{t+1} - p_t`` pooled over sequences (units²)."""
     a = np.concatenate([np.diff(s, axis=0) for s in _sequences(natural, "natural")])
     b = np.concatenate([np.diff(s, axis=0) for s in _sequences(generated, "generated")])
@@ -68,39 +76,39 @@ def fd_k(natural, generated) -> float:
     return frechet_distance_samples(a, b)
 
 
-def l1div_parts(positions) -> tuple[float, int]:
+def l1div_parts(positions: npt.ArrayLike) -> tuple[float, int]:
     """``(Σ_t Σ_d |p_td - mean_t p_d|, T)`` of one sequence (combine with :func:`l1div`)."""
     p = pose_vectors(positions)
     return float(np.abs(p - p.mean(axis=0)).sum()), len(p)
 
 
-def l1div(sequences) -> float:
+def l1div(sequences: Any) -> float:
     """L1 diversity: summed absolute deviation from each sequence's mean pose, per frame (units)."""
     parts = [l1div_parts(s) for s in _sequences_raw(sequences)]
     return sum(p[0] for p in parts) / sum(p[1] for p in parts)
 
 
-def div_k_sequence(positions) -> float:
+def div_k_sequence(positions: npt.ArrayLike) -> float:
     """Mean over dimensions of the population variance over time of one sequence (units²)."""
     return float(np.var(pose_vectors(positions), axis=0).mean())
 
 
-def div_k(sequences) -> float:
+def div_k(sequences: Any) -> float:
     """Div_k (``var_k``): :func:`div_k_sequence` averaged over sequences (units²)."""
     return float(np.mean([div_k_sequence(s) for s in _sequences_raw(sequences)]))
 
 
-def _sequences_raw(seqs):
+def _sequences_raw(seqs: Any) -> list[Any]:
     if isinstance(seqs, np.ndarray) and seqs.ndim == 3:
         return [seqs]
     seqs = list(seqs)
     if not seqs:
         raise InputError("no sequences", field="sequences")
-    return seqs
+    return list(seqs)
 
 
 # --- moments: exact, combinable summaries of sample sets ------------------------------------
-def moments(samples) -> tuple[int, np.ndarray, np.ndarray]:
+def moments(samples: npt.ArrayLike) -> tuple[int, np.ndarray, np.ndarray]:
     """``(n, mean (D,), scatter (D, D))`` with scatter = Σ (x - mean)(x - mean)^T."""
     x = samples_array(samples, "samples")
     mean = x.mean(axis=0)
@@ -108,7 +116,7 @@ def moments(samples) -> tuple[int, np.ndarray, np.ndarray]:
     return len(x), mean, c.T @ c
 
 
-def combine_moments(parts, weights=None) -> tuple[int, np.ndarray, np.ndarray]:
+def combine_moments(parts: Iterable[Moments], weights: npt.ArrayLike | None = None) -> Moments:
     """Moments of the union of sample sets (``weights``: integer multiplicities, for bootstrap).
 
     Same as :func:`moments` of the concatenated samples, up to round-off; combining in a fixed
@@ -127,7 +135,7 @@ def combine_moments(parts, weights=None) -> tuple[int, np.ndarray, np.ndarray]:
     return n, mean, scatter
 
 
-def moments_covariance(m) -> tuple[np.ndarray, np.ndarray]:
+def moments_covariance(m: Moments) -> tuple[np.ndarray, np.ndarray]:
     """Mean and unbiased covariance (N - 1) from moments."""
     n, mean, scatter = m
     if n < 2:
@@ -135,7 +143,7 @@ def moments_covariance(m) -> tuple[np.ndarray, np.ndarray]:
     return mean, scatter / (n - 1)
 
 
-def frechet_from_moments(m1, m2) -> float:
+def frechet_from_moments(m1: Moments, m2: Moments) -> float:
     """Fréchet distance between Gaussians given by two moment summaries (warns if N <= D)."""
     import warnings
 

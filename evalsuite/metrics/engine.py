@@ -73,15 +73,15 @@ class ScoreSetup:
 class ScoreResult:
     """What a scoring run produced; the report and figure writers read it."""
 
-    summary: list[dict]
-    per_sequence: list[dict]
-    per_joint: list[dict]
-    histograms: list[dict]
+    summary: list[dict[str, Any]]
+    per_sequence: list[dict[str, Any]]
+    per_joint: list[dict[str, Any]]
+    histograms: list[dict[str, Any]]
     issues: list[str]
     errors: list[str]
     fps: float
-    files: dict[str, dict[str, dict]]
-    wrist_tracks: dict[str, list]
+    files: dict[str, dict[str, dict[str, Any]]]
+    wrist_tracks: dict[str, list[Any]]
     plan: Plan
     setup: ScoreSetup
     convention: Convention
@@ -110,7 +110,7 @@ def _selected_positions(motion: Any, joints: list[str]) -> np.ndarray:
 
 
 def _measure(motion: Any, pos: np.ndarray, setup: ScoreSetup, conv: Convention, natural_pos: np.ndarray | None,
-             onsets: np.ndarray | None, natural_cache: dict) -> dict:
+             onsets: np.ndarray | None, natural_cache: dict[Any, Any]) -> dict[str, Any]:
     if len(pos) < 4:
         raise InputError(f"only {len(pos)} frames; at least 4 are needed (jerk uses 3rd differences)",
                          path=motion.source)
@@ -122,7 +122,7 @@ def _measure(motion: Any, pos: np.ndarray, setup: ScoreSetup, conv: Convention, 
     return ctx.record
 
 
-def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path | None, ScoreSetup]) -> dict:
+def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path | None, ScoreSetup]) -> dict[str, Any]:
     """Measure one sequence in every condition: ``task = (name, [(condition, path), ...], audio, setup)``.
 
     The first entry is the natural file. Returns ``{"name", "records": {condition: record}}`` where a
@@ -130,7 +130,7 @@ def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path
     """
     name, entries, audio_path, setup = task
     conv = get_convention(setup.convention)
-    records: dict[str, dict] = {}
+    records: dict[str, dict[str, Any]] = {}
     onsets = None
     audio_error = None
     if audio_path is not None and any(f.needs_audio for f in setup.active()):
@@ -142,7 +142,7 @@ def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path
         except InputError as exc:
             audio_error = str(exc)
     natural_pos = None
-    natural_cache: dict = {}
+    natural_cache: dict[Any, Any] = {}
     for k, (cond, path) in enumerate(entries):
         try:
             motion = _load(path, setup)
@@ -164,7 +164,7 @@ def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path
     return {"name": name, "records": records}
 
 
-def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict:
+def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict[str, Any]:
     """99.5th percentiles of pooled speed and acceleration of one natural file (for automatic bins)."""
     from evalsuite.metrics.kinematics import derivative_norms
 
@@ -187,9 +187,9 @@ class _Folder:
 
     def __init__(self, setup: ScoreSetup, reference: str, keep: bool):
         self.families, self.reference, self.keep = setup.active(), reference, keep
-        self.acc: dict[str, dict] = {}
+        self.acc: dict[str, dict[str, Any]] = {}
 
-    def __call__(self, index: int, result: dict) -> dict:
+    def __call__(self, index: int, result: dict[str, Any]) -> dict[str, Any]:
         records = result["records"]
         nat = records.get(self.reference, {})
         for cond, rec in records.items():
@@ -205,8 +205,8 @@ class _Folder:
         return result
 
 
-def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict], *, bootstrap: int = 0, seed: int = 0,
-                   strict: bool = False, acc: dict | None = None) -> ScoreResult:
+def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]], *, bootstrap: int = 0, seed: int = 0,
+                   strict: bool = False, acc: dict[str, Any] | None = None) -> ScoreResult:
     """Summary, per-sequence and per-joint rows, pooled histograms and issues from task results."""
     if acc is None:
         folder = _Folder(setup, plan.reference, keep=True)
@@ -214,7 +214,7 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict], *, bootst
             folder(i, res)
         acc = folder.acc
     conv = get_convention(setup.convention)
-    records: dict[str, dict[str, dict]] = {c: {} for c in plan.conditions}
+    records: dict[str, dict[str, dict[str, Any]]] = {c: {} for c in plan.conditions}
     issues, errors = list(plan.issues), []
     for res in results:
         for cond, rec in res["records"].items():
@@ -262,7 +262,8 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict], *, bootst
     return out
 
 
-def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path], *, joints: object = None,
+def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path], *,
+                  joints: str | Sequence[str] | None = None,
                   metrics: str | Sequence[str] | None = None, convention: str = "default",
                   audio_dir: str | pathlib.Path | None = None, fps: float | None = None,
                   resample: float | None = None, speed_bins: str | tuple[float, float] | None = None,
@@ -294,7 +295,7 @@ def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | path
     return reduce_results(plan, setup, results, bootstrap=bootstrap, seed=seed, strict=strict, acc=folder.acc)
 
 
-def _describe_task(task: tuple) -> str:
+def _describe_task(task: tuple[Any, ...]) -> str:
     return f"sequence {task[0]!r}"
 
 

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import pathlib
+from typing import Any
 
 import numpy as np
 
@@ -19,7 +20,7 @@ from evalsuite.metrics.engine import ScoreResult
 __all__ = ["histogram_figures", "wrist_distribution_figure", "write_figures"]
 
 
-def _plt():
+def _plt() -> Any:
     import matplotlib
 
     matplotlib.use("Agg", force=True)
@@ -28,19 +29,19 @@ def _plt():
     return plt
 
 
-def _save(fig, base: pathlib.Path) -> list[pathlib.Path]:
+def _save(fig: Any, base: pathlib.Path) -> list[pathlib.Path]:
     paths = [base.with_suffix(".png"), base.with_suffix(".svg")]
     fig.savefig(paths[0], dpi=120)
     fig.savefig(paths[1])
     return paths
 
 
-def histogram_figures(result: ScoreResult, out_dir) -> list[pathlib.Path]:
+def histogram_figures(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
     plt = _plt()
     out = pathlib.Path(out_dir)
     setup, conv, plan = result.setup, result.convention, result.plan
     paths = []
-    by_key: dict = {}
+    by_key: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for h in result.histograms:
         by_key.setdefault((h["quantity"], h["group"]), []).append(h)
     for (q, group), hists in by_key.items():
@@ -67,7 +68,7 @@ def histogram_figures(result: ScoreResult, out_dir) -> list[pathlib.Path]:
     return paths
 
 
-def wrist_distribution_figure(result: ScoreResult, out_dir) -> list[pathlib.Path]:
+def wrist_distribution_figure(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
     plt = _plt()
     plan = result.plan
     tracks = {c: np.concatenate([t.reshape(-1, 3) for t, _ in ts]) for c, ts in result.wrist_tracks.items() if ts}
@@ -106,7 +107,7 @@ def wrist_distribution_figure(result: ScoreResult, out_dir) -> list[pathlib.Path
     return paths
 
 
-def write_figures(result: ScoreResult, out_dir) -> list[pathlib.Path]:
+def write_figures(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return histogram_figures(result, out) + wrist_distribution_figure(result, out)

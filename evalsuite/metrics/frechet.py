@@ -22,6 +22,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = ["FrechetWarning", "gaussian_stats", "frechet_distance", "frechet_distance_details",
            "frechet_distance_samples"]
@@ -50,10 +51,10 @@ def gaussian_stats(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _psd_sqrt(s: np.ndarray) -> np.ndarray:
     s = (s + s.T) / 2
     w, v = np.linalg.eigh(s)
-    return (v * np.sqrt(np.clip(w, 0.0, None))) @ v.T
+    return np.asarray((v * np.sqrt(np.clip(w, 0.0, None))) @ v.T)
 
 
-def frechet_distance_details(mu1, sigma1, mu2, sigma2) -> dict:
+def frechet_distance_details(mu1: npt.ArrayLike, sigma1: npt.ArrayLike, mu2: npt.ArrayLike, sigma2: npt.ArrayLike) -> dict[str, float]:
     """The distance and its parts: ``mean_term``, ``trace_term``, ``raw`` (unclipped), ``value``."""
     mu1, mu2 = np.atleast_1d(np.asarray(mu1, float)), np.atleast_1d(np.asarray(mu2, float))
     s1, s2 = np.atleast_2d(np.asarray(sigma1, float)), np.atleast_2d(np.asarray(sigma2, float))
@@ -72,7 +73,7 @@ def frechet_distance_details(mu1, sigma1, mu2, sigma2) -> dict:
     return {"mean_term": mean_term, "trace_term": trace_term, "raw": raw, "value": max(raw, 0.0)}
 
 
-def frechet_distance(mu1, sigma1, mu2, sigma2) -> float:
+def frechet_distance(mu1: npt.ArrayLike, sigma1: npt.ArrayLike, mu2: npt.ArrayLike, sigma2: npt.ArrayLike) -> float:
     """Fréchet distance between ``N(mu1, sigma1)`` and ``N(mu2, sigma2)`` (>= 0)."""
     return frechet_distance_details(mu1, sigma1, mu2, sigma2)["value"]
 

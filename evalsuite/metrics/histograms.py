@@ -18,6 +18,7 @@ Hellinger distance (range [0, 1]):
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.errors import InputError
 
@@ -25,7 +26,7 @@ __all__ = ["joint_histograms", "histogram_counts", "clipped_fraction", "hellinge
            "hellinger_rows", "automatic_edges"]
 
 
-def _check_edges(edges) -> np.ndarray:
+def _check_edges(edges: npt.ArrayLike) -> np.ndarray:
     e = np.asarray(edges, dtype=np.float64)
     if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0) or not np.isfinite(e).all():
         raise InputError("histogram edges must be a 1-D increasing array of at least 2 values", field="bins")
@@ -34,7 +35,7 @@ def _check_edges(edges) -> np.ndarray:
     return e
 
 
-def joint_histograms(values, edges) -> np.ndarray:
+def joint_histograms(values: npt.ArrayLike, edges: npt.ArrayLike) -> np.ndarray:
     """Counts per joint ``(J, B + 1)``: B bins of ``edges`` plus the count above the last edge.
 
     Args:
@@ -60,13 +61,13 @@ def joint_histograms(values, edges) -> np.ndarray:
     return np.bincount(flat.ravel(), minlength=n_joints * (n_bins + 1)).reshape(n_joints, n_bins + 1)
 
 
-def histogram_counts(counts, overflow: bool) -> np.ndarray:
+def histogram_counts(counts: npt.ArrayLike, overflow: bool) -> np.ndarray:
     """The bins that take part in normalisation: all ``B + 1`` columns, or the first B."""
     c = np.asarray(counts)
     return c if overflow else c[..., :-1]
 
 
-def clipped_fraction(counts) -> np.ndarray:
+def clipped_fraction(counts: npt.ArrayLike) -> np.ndarray:
     """Fraction of values above the last edge (last column over the total), NaN if empty."""
     c = np.asarray(counts, dtype=np.float64)
     total = c.sum(axis=-1)
@@ -74,7 +75,7 @@ def clipped_fraction(counts) -> np.ndarray:
         return np.where(total > 0, c[..., -1] / np.where(total > 0, total, 1), np.nan)
 
 
-def hellinger_distance(h1, h2) -> float:
+def hellinger_distance(h1: npt.ArrayLike, h2: npt.ArrayLike) -> float:
     """Hellinger distance ``sqrt(1 - Σ sqrt(p q))`` between two histograms (counts or masses).
 
     Each histogram is normalised to sum 1 first; the distance is computed as the equal
@@ -85,7 +86,7 @@ def hellinger_distance(h1, h2) -> float:
     return float(hellinger_rows(np.atleast_2d(h1), np.atleast_2d(h2))[0])
 
 
-def hellinger_rows(h1, h2) -> np.ndarray:
+def hellinger_rows(h1: npt.ArrayLike, h2: npt.ArrayLike) -> np.ndarray:
     """Row-wise Hellinger distance of two stacks of histograms ``(..., B)`` (broadcasting)."""
     a = np.asarray(h1, dtype=np.float64)
     b = np.asarray(h2, dtype=np.float64)

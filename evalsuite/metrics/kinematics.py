@@ -17,6 +17,7 @@ per condition the mean and the std of those per-sequence values across sequences
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.metrics._validate import positions_array, positive
 
@@ -26,7 +27,7 @@ __all__ = ["derivative_norms", "average_derivative_norm", "average_speed", "aver
 ORDERS = {"speed": 1, "acceleration": 2, "jerk": 3}
 
 
-def derivative_norms(positions, order: int, fps: float | None = None) -> np.ndarray:
+def derivative_norms(positions: npt.ArrayLike, order: int, fps: float | None = None) -> np.ndarray:
     """Per-step norms ``||Δ^n x[t, j]||_2 · fps^n``, shape ``(T - n, J)``.
 
     Args:
@@ -41,38 +42,38 @@ def derivative_norms(positions, order: int, fps: float | None = None) -> np.ndar
     norms = np.sqrt(np.einsum("tjk,tjk->tj", d, d))
     if fps is not None:
         norms *= positive(fps, "fps") ** order
-    return norms
+    return np.asarray(norms)
 
 
-def average_derivative_norm(positions, order: int, fps: float | None = None) -> np.ndarray:
+def average_derivative_norm(positions: npt.ArrayLike, order: int, fps: float | None = None) -> np.ndarray:
     """Mean over steps of :func:`derivative_norms`, one value per joint ``(J,)``."""
-    return derivative_norms(positions, order, fps).mean(axis=0)
+    return np.asarray(derivative_norms(positions, order, fps).mean(axis=0))
 
 
-def average_speed(positions, fps: float | None) -> np.ndarray:
+def average_speed(positions: npt.ArrayLike, fps: float | None) -> np.ndarray:
     """Average speed per joint ``mean_t ||x[t+1] - x[t]|| · fps`` (units/s; per frame if fps is None)."""
     return average_derivative_norm(positions, 1, fps)
 
 
-def average_acceleration(positions, fps: float | None) -> np.ndarray:
+def average_acceleration(positions: npt.ArrayLike, fps: float | None) -> np.ndarray:
     """Average acceleration per joint ``mean_t ||Δ² x[t]|| · fps²`` (GENEA "AA"; units/s²)."""
     return average_derivative_norm(positions, 2, fps)
 
 
-def average_jerk(positions, fps: float | None) -> np.ndarray:
+def average_jerk(positions: npt.ArrayLike, fps: float | None) -> np.ndarray:
     """Average jerk per joint ``mean_t ||Δ³ x[t]|| · fps³`` (GENEA "AJ"; units/s³)."""
     return average_derivative_norm(positions, 3, fps)
 
 
-def sequence_means(per_joint) -> np.ndarray:
+def sequence_means(per_joint: npt.ArrayLike) -> np.ndarray:
     """Per-sequence value: mean over joints of a ``(S, J)`` table -> ``(S,)``."""
     table = np.asarray(per_joint, dtype=np.float64)
     if table.ndim != 2 or table.size == 0:
         raise ValueError(f"expected a non-empty (sequences, joints) table, got shape {table.shape}")
-    return table.mean(axis=1)
+    return np.asarray(table.mean(axis=1))
 
 
-def across_sequences(values, ddof: int = 1) -> tuple[float, float]:
+def across_sequences(values: npt.ArrayLike, ddof: int = 1) -> tuple[float, float]:
     """Mean and std across sequences (std with ``ddof``; NaN when there are too few values)."""
     v = np.asarray(values, dtype=np.float64).ravel()
     v = v[np.isfinite(v)]

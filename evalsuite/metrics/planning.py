@@ -126,7 +126,8 @@ def _audio_files(audio_dir: str | pathlib.Path, ref_names: list[str], issues: li
     return audio
 
 
-def plan_scoring(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path], joints: object = None,
+def plan_scoring(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path],
+                 joints: str | Sequence[str] | None = None,
                  audio_dir: str | pathlib.Path | None = None, strict: bool = False,
                  fps: float | None = None) -> Plan:
     """Pair files by name, check folders, resolve the joint set (see the module docstring)."""

@@ -15,6 +15,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.errors import InputError
 from evalsuite.metrics._validate import positions_array
@@ -26,7 +27,8 @@ class LengthMismatchWarning(UserWarning):
     """Paired sequences differ in length by more than the tolerance; they were truncated."""
 
 
-def align_lengths(generated, natural, fps: float, tolerance_s: float = 1.0, name: str = ""):
+def align_lengths(generated: npt.ArrayLike, natural: npt.ArrayLike, fps: float, tolerance_s: float = 1.0,
+                  name: str = "") -> tuple[np.ndarray, np.ndarray, float]:
     """Truncate two ``(T, J, 3)`` arrays to their common length; warn if they differ by > tolerance.
 
     Returns ``(generated[:T], natural[:T], difference_in_seconds)``.
@@ -44,7 +46,7 @@ def align_lengths(generated, natural, fps: float, tolerance_s: float = 1.0, name
     return a[:n], b[:n], diff_s
 
 
-def _pair(generated, natural):
+def _pair(generated: npt.ArrayLike, natural: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     a = positions_array(generated, "generated")
     b = positions_array(natural, "natural")
     if a.shape != b.shape:
@@ -53,14 +55,14 @@ def _pair(generated, natural):
     return a, b
 
 
-def average_position_error(generated, natural) -> np.ndarray:
+def average_position_error(generated: npt.ArrayLike, natural: npt.ArrayLike) -> np.ndarray:
     """APE per joint ``(J,)``: mean over frames of the Euclidean distance to the natural joint."""
     a, b = _pair(generated, natural)
     d = a - b
-    return np.sqrt(np.einsum("tjk,tjk->tj", d, d)).mean(axis=0)
+    return np.asarray(np.sqrt(np.einsum("tjk,tjk->tj", d, d)).mean(axis=0))
 
 
-def mean_absolute_error(generated, natural) -> np.ndarray:
+def mean_absolute_error(generated: npt.ArrayLike, natural: npt.ArrayLike) -> np.ndarray:
     """MAE per joint ``(J,)``: mean over frames and the 3 coordinates of the absolute difference."""
     a, b = _pair(generated, natural)
-    return np.abs(a - b).mean(axis=(0, 2))
+    return np.asarray(np.abs(a - b).mean(axis=(0, 2)))

@@ -9,6 +9,8 @@ import json
 import math
 import pathlib
 import platform
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -24,7 +26,7 @@ _SYMBOL = {"lower": "↓", "higher": "↑", "closer to natural": "≈nat"}
 _TEX_SYMBOL = {"lower": r"$\downarrow$", "higher": r"$\uparrow$", "closer to natural": r"$\approx$nat"}
 
 
-def summary_frame(rows) -> pd.DataFrame:
+def summary_frame(rows: Iterable[dict[str, Any]]) -> pd.DataFrame:
     frame = pd.DataFrame(list(rows))
     for c in SUMMARY_COLUMNS:
         if c not in frame.columns:
@@ -33,7 +35,7 @@ def summary_frame(rows) -> pd.DataFrame:
     return frame[SUMMARY_COLUMNS + extra]
 
 
-def _fmt(x, digits=4) -> str:
+def _fmt(x: float | None, digits: int = 4) -> str:
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "n/a"
     ax = abs(x)
@@ -42,7 +44,7 @@ def _fmt(x, digits=4) -> str:
     return f"{x:.{digits}g}" if ax >= 1 else f"{x:.{digits}f}".rstrip("0").rstrip(".") or "0"
 
 
-def _cell(row) -> str:
+def _cell(row: dict[str, Any]) -> str:
     text = _fmt(row["value"])
     if isinstance(row.get("std"), float) and math.isfinite(row["std"]):
         text += f" ± {_fmt(row['std'], 3)}"
@@ -51,7 +53,7 @@ def _cell(row) -> str:
     return text
 
 
-def _pivot(frame: pd.DataFrame):
+def _pivot(frame: pd.DataFrame) -> tuple[list[str], list[str], dict[tuple[str, str], str], dict[str, tuple[str, str]]]:
     conditions = list(dict.fromkeys(frame["condition"]))
     metrics = list(dict.fromkeys(frame["metric"]))
     cells = {(r["condition"], r["metric"]): _cell(r) for r in frame.to_dict("records")}
@@ -66,7 +68,9 @@ def format_table(frame: pd.DataFrame) -> str:
     rows = [[m, str(meta[m][0]), _SYMBOL.get(meta[m][1], str(meta[m][1]))] +
             [cells.get((c, m), "") for c in conditions] for m in metrics]
     widths = [max(len(str(x)) for x in col) for col in zip(header, *rows)]
-    line = lambda r: "  ".join(str(x).ljust(w) for x, w in zip(r, widths)).rstrip()  # noqa: E731
+    def line(r: list[str]) -> str:
+        return "  ".join(str(x).ljust(w) for x, w in zip(r, widths)).rstrip()
+
     out = [line(header), line(["-" * w for w in widths])] + [line(r) for r in rows]
     has_ci = bool(np.isfinite(pd.to_numeric(frame["ci_low"], errors="coerce")).any())
     legend = ("value ± std across sequences" + (" [bootstrap 95% CI]" if has_ci else "")
@@ -105,7 +109,7 @@ def latex_table(frame: pd.DataFrame) -> str:
                       *body, r"\bottomrule", r"\end{tabular}"]) + "\n"
 
 
-def _jsonable(x):
+def _jsonable(x: Any) -> Any:
     if isinstance(x, dict):
         return {str(k): _jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
@@ -121,7 +125,7 @@ def _jsonable(x):
     return x
 
 
-def provenance(result: ScoreResult) -> dict:
+def provenance(result: ScoreResult) -> dict[str, Any]:
     """What a run depended on: versions, convention, joints, fps, bins, every input file's SHA-256."""
     import scipy
 
@@ -153,7 +157,7 @@ def provenance(result: ScoreResult) -> dict:
     }
 
 
-def write_outputs(result: ScoreResult, out_dir) -> dict:
+def write_outputs(result: ScoreResult, out_dir: str | pathlib.Path) -> dict[str, pathlib.Path]:
     """Write every table and the JSON under ``out_dir``; returns ``{kind: path}``."""
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

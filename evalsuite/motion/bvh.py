@@ -85,10 +85,11 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
     end_offsets: list[tuple[float, float, float]] = []
     name_lines: dict[str, int] = {}
 
-    def offset_values(owner: str):
-        return tuple(tokens.number(f"OFFSET {axis} of {owner}") for axis in "xyz")
+    def offset_values(owner: str) -> tuple[float, float, float]:
+        x, y, z = (tokens.number(f"OFFSET {axis} of {owner}") for axis in "xyz")
+        return x, y, z
 
-    def joint(parent: int, keyword_line: int):
+    def joint(parent: int, keyword_line: int) -> None:
         # The name is every token up to '{' on the keyword's line (names rarely hold spaces).
         parts = []
         while tokens.peek() is not None and tokens.peek() != "{" and tokens.items[tokens.pos][1] == keyword_line:
@@ -229,7 +230,7 @@ def _frames_fast(body: bytes, n_frames: int, n_ch: int) -> np.ndarray | None:
             arr = arr[:, :-1]  # trailing space at the end of every line
         if arr.shape == (n_frames, n_ch) and np.isfinite(arr).all():
             # Column-major as pandas builds it: no copy, and FK reads whole channel columns.
-            return arr
+            return np.asarray(arr)
     except (ValueError, pd.errors.ParserError):
         pass
     if not _every_line_has(stripped, n_ch):
@@ -259,7 +260,7 @@ def _every_line_has(data: bytes, n_tokens: int) -> bool:
     return bool(np.all(per_line == n_tokens))
 
 
-def parse_bvh(data: bytes | str, path: str = "<string>"):
+def parse_bvh(data: bytes | str, path: str = "<string>") -> tuple[Skeleton, np.ndarray, float]:
     """Parse BVH content. Returns ``(skeleton, values (T, C), frame_time)``."""
     path = os.fspath(path)
     if isinstance(data, str):
@@ -331,7 +332,7 @@ def parse_bvh(data: bytes | str, path: str = "<string>"):
     return skeleton, values, frame_time
 
 
-def read_bvh_file(path) -> tuple:
+def read_bvh_file(path: str | os.PathLike[str]) -> tuple[Skeleton, np.ndarray, float]:
     """Read a BVH file: ``(skeleton, values, frame_time)``. Raises BVHError for bad input."""
     path = os.fspath(path)
     try:
@@ -365,7 +366,7 @@ def format_bvh(skeleton: Skeleton, values: np.ndarray, frame_time: float, precis
     for e, p in enumerate(skeleton.end_site_parents):
         ends[int(p)].append(e)
 
-    def write_joint(j: int, depth: int):
+    def write_joint(j: int, depth: int) -> None:
         ind = "\t" * depth
         kind = "ROOT" if skeleton.parents[j] < 0 else "JOINT"
         out.write(f"{ind}{kind} {skeleton.names[j]}\n{ind}{{\n")
@@ -388,7 +389,7 @@ def format_bvh(skeleton: Skeleton, values: np.ndarray, frame_time: float, precis
     return out.getvalue()
 
 
-def write_bvh(path, skeleton: Skeleton, values: np.ndarray, frame_time: float, precision: int = 6) -> None:
+def write_bvh(path: str | os.PathLike[str], skeleton: Skeleton, values: np.ndarray, frame_time: float, precision: int = 6) -> None:
     text = format_bvh(skeleton, values, frame_time, precision)
     with open(path, "w", encoding="utf-8", newline="\n") as fh:
         fh.write(text)

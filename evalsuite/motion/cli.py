@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import pathlib
+from typing import TYPE_CHECKING
 
 import click
 
@@ -14,8 +15,11 @@ _CONVENTION = click.option(
          "channels replace the OFFSET), pymo (joint channels added to the OFFSET, as GENEA 2023 FGD), "
          "pymotion/bvhtoolbox (joint channels ignored).")
 
+if TYPE_CHECKING:
+    from evalsuite.motion.motion import Motion
 
-def _load(path, fps, joints_file, convention):
+
+def _load(path: str, fps: float | None, joints_file: str | None, convention: str | None) -> Motion:
     from evalsuite.motion.io import load_motion
 
     names = None
@@ -32,7 +36,8 @@ def _load(path, fps, joints_file, convention):
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
 @click.option("--joints/--no-joints", "list_joints", default=False, help="Also list every joint and its channels.")
 @_CONVENTION
-def info(files, fps, joints_file, as_json, list_joints, convention):
+def info(files: tuple[str, ...], fps: float | None, joints_file: str | None, as_json: bool, list_joints: bool,
+         convention: str | None) -> None:
     """Summarise motion files: joints, channels, fps, frames, duration, a guess of the units."""
     out = []
     for path in files:
@@ -79,7 +84,9 @@ def info(files, fps, joints_file, as_json, list_joints, convention):
               help="Smoothing filter: moving average (5 frames), Savitzky-Golay (9, 3) or One-Euro.")
 @click.option("--end-sites", is_flag=True, help="Include End Sites in positions outputs (as <parent>_End).")
 @_CONVENTION
-def convert(src, dst, joints, fps, input_fps, joints_file, center_axes, smooth, end_sites, convention):
+def convert(src: str, dst: str, joints: str | None, fps: float | None, input_fps: float | None,
+            joints_file: str | None, center_axes: str | None, smooth: str | None, end_sites: bool,
+            convention: str | None) -> None:
     """Convert motion between BVH and positions (.npz, .npy, .csv).
 
     Operations run in this order: select joints, resample, center, smooth.

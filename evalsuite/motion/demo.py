@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 import pathlib
+from collections.abc import Callable
 
 from evalsuite.motion.io import load_motion, save_motion
 from evalsuite.motion.samples import sample_paths
 
 
-def run(out_dir: pathlib.Path, echo) -> None:
+def run(out_dir: pathlib.Path, echo: Callable[[str], None]) -> None:
     target = out_dir / "positions"
     target.mkdir(parents=True, exist_ok=True)
     for path in sample_paths():

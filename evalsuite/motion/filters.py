@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.ndimage import uniform_filter1d
@@ -15,12 +16,15 @@ from evalsuite.errors import MotionError
 
 __all__ = ["moving_average", "savgol", "one_euro", "smooth", "FILTERS"]
 
+if TYPE_CHECKING:
+    from evalsuite.motion.motion import Motion
+
 
 def moving_average(x: np.ndarray, window: int = 5) -> np.ndarray:
     """Centred moving average over ``window`` frames; edges repeat the first/last frame."""
     if window < 1:
         raise MotionError(f"window must be >= 1, got {window}")
-    return uniform_filter1d(np.asarray(x, dtype=np.float64), size=window, axis=0, mode="nearest")
+    return np.asarray(uniform_filter1d(np.asarray(x, dtype=np.float64), size=window, axis=0, mode="nearest"))
 
 
 def savgol(x: np.ndarray, window: int = 9, order: int = 3) -> np.ndarray:
@@ -30,10 +34,10 @@ def savgol(x: np.ndarray, window: int = 9, order: int = 3) -> np.ndarray:
         raise MotionError(f"savgol needs an odd window larger than the order, got window={window}, order={order}")
     if len(x) < window:
         raise MotionError(f"savgol window {window} is longer than the motion ({len(x)} frames)")
-    return savgol_filter(x, window, order, axis=0, mode="interp")
+    return np.asarray(savgol_filter(x, window, order, axis=0, mode="interp"))
 
 
-def _alpha(cutoff, fps):
+def _alpha(cutoff: Any, fps: float) -> Any:
     tau = 1.0 / (2 * np.pi * cutoff)
     return 1.0 / (1.0 + tau * fps)
 
@@ -47,7 +51,7 @@ def one_euro(x: np.ndarray, fps: float, min_cutoff: float = 1.0, beta: float = 0
     """
     x = np.asarray(x, dtype=np.float64)
     if len(x) == 0:
-        return x.copy()
+        return np.asarray(x.copy())
     out = np.empty_like(x)
     out[0] = x[0]
     dx_prev = np.zeros_like(x[0])
@@ -66,7 +70,7 @@ FILTERS: dict[str, Callable[..., np.ndarray]] = {"moving_average": moving_averag
                                                   "one_euro": one_euro}
 
 
-def smooth(motion, method: str = "moving_average", **params):
+def smooth(motion: Motion, method: str = "moving_average", **params: Any) -> Motion:
     """Smooth a motion with one of :data:`FILTERS`.
 
     A BVH motion is smoothed on its channels (rotation angles unwrapped first, so a jump

@@ -18,6 +18,8 @@ Conventions (named, chosen by the caller; see ``docs/motion.md``):
 """
 from __future__ import annotations
 
+from typing import Any, Literal, overload
+
 import numpy as np
 
 from evalsuite.motion.rotations import euler_to_matrix_elements, multiply_elements
@@ -43,7 +45,7 @@ def check_conventions(root_offset: str, joint_translation: str) -> None:
                          f"got {joint_translation!r}")
 
 
-def local_rotation_elements(skeleton: Skeleton, values: np.ndarray) -> list:
+def local_rotation_elements(skeleton: Skeleton, values: np.ndarray) -> list[Any]:
     """Local rotation of every joint as a list (per joint) of 9 element entries.
 
     Each entry is a float constant or an array of shape ``(T,)``. Joints that share a
@@ -55,7 +57,7 @@ def local_rotation_elements(skeleton: Skeleton, values: np.ndarray) -> list:
         axes = "".join(c[0] for c in chans if c.endswith("rotation"))
         cols = [int(starts[j]) + i for i, c in enumerate(chans) if c.endswith("rotation")]
         groups.setdefault(axes, []).append((j, cols))
-    result: list = [None] * skeleton.n_joints
+    result: list[Any] = [None] * skeleton.n_joints
     for axes, members in groups.items():
         if not axes:
             for j, _ in members:
@@ -71,13 +73,13 @@ def local_rotation_elements(skeleton: Skeleton, values: np.ndarray) -> list:
 
 
 def local_translations(skeleton: Skeleton, values: np.ndarray, root_offset: str = "ignore",
-                       joint_translation: str = "replace") -> list:
+                       joint_translation: str = "replace") -> list[Any]:
     """Local translation of every joint: a list of 3 entries (float or ``(T,)`` array)."""
     check_conventions(root_offset, joint_translation)
     starts = skeleton.channel_starts
     out = []
     for j, chans in enumerate(skeleton.channels):
-        t: list = [float(v) for v in skeleton.offsets[j]]
+        t: list[Any] = [float(v) for v in skeleton.offsets[j]]
         is_root = skeleton.parents[j] < 0
         mode = ("replace" if root_offset == "ignore" else "add") if is_root else joint_translation
         if mode != "ignore":
@@ -90,7 +92,7 @@ def local_translations(skeleton: Skeleton, values: np.ndarray, root_offset: str 
     return out
 
 
-def _apply(rot: list, vec: list) -> list:
+def _apply(rot: list[Any], vec: list[Any]) -> list[Any]:
     """``rot @ vec`` for element lists (vec entries are floats or arrays)."""
     out = []
     for i in range(3):
@@ -112,9 +114,18 @@ def _apply(rot: list, vec: list) -> list:
 BLOCK_FRAMES = 2048
 
 
+@overload
+def forward_kinematics(skeleton: Skeleton, values: np.ndarray, *, root_offset: str = ..., joint_translation: str = ...,
+                       end_sites: bool = ..., world_rotations: Literal[False] = ...,
+                       block_frames: int = ...) -> np.ndarray: ...
+@overload
+def forward_kinematics(skeleton: Skeleton, values: np.ndarray, *, root_offset: str = ..., joint_translation: str = ...,
+                       end_sites: bool = ..., world_rotations: Literal[True],
+                       block_frames: int = ...) -> tuple[np.ndarray, np.ndarray]: ...
 def forward_kinematics(skeleton: Skeleton, values: np.ndarray, *, root_offset: str = "ignore",
                        joint_translation: str = "replace", end_sites: bool = False,
-                       world_rotations: bool = False, block_frames: int = BLOCK_FRAMES):
+                       world_rotations: bool = False,
+                       block_frames: int = BLOCK_FRAMES) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """World positions of every joint (and optionally End Site) for every frame.
 
     Args:
@@ -139,7 +150,7 @@ def forward_kinematics(skeleton: Skeleton, values: np.ndarray, *, root_offset: s
         block = values[start:start + block_frames]
         pos, rot = _fk_block(skeleton, block, root_offset, joint_translation, end_sites, world_rotations)
         positions[start:start + len(block)] = pos.transpose(2, 0, 1)
-        if rotations is not None:
+        if rotations is not None and rot is not None:
             for j, elements in enumerate(rot):
                 for k, e in enumerate(elements):
                     rotations[start:start + len(block), j, k] = e
@@ -148,7 +159,8 @@ def forward_kinematics(skeleton: Skeleton, values: np.ndarray, *, root_offset: s
     return positions, rotations.reshape(n_frames, n_joints, 3, 3)
 
 
-def _fk_block(skeleton, values, root_offset, joint_translation, end_sites, world_rotations):
+def _fk_block(skeleton: Skeleton, values: np.ndarray, root_offset: str, joint_translation: str, end_sites: bool,
+              world_rotations: bool) -> tuple[np.ndarray, list[list[Any]] | None]:
     n_frames = values.shape[0]
     n_joints = skeleton.n_joints
     rot_local = local_rotation_elements(skeleton, values)
@@ -161,7 +173,7 @@ def _fk_block(skeleton, values, root_offset, joint_translation, end_sites, world
 
     n_out = n_joints + (len(skeleton.end_site_parents) if end_sites else 0)
     positions = np.empty((n_out, 3, n_frames), dtype=np.float64)
-    world_rot: list = [None] * n_joints
+    world_rot: list[Any] = [None] * n_joints
     for j in range(n_joints):
         p = skeleton.parents[j]
         if p < 0:

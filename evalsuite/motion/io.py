@@ -11,8 +11,10 @@ from __future__ import annotations
 import os
 import pathlib
 import zipfile
+from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.errors import InputError, MotionError
 from evalsuite.motion.bvh import read_bvh_file, write_bvh
@@ -23,7 +25,8 @@ POSITION_SUFFIXES = (".npy", ".npz", ".csv")
 MOTION_SUFFIXES = (".bvh",) + POSITION_SUFFIXES
 
 
-def load_motion(path, *, fps: float | None = None, joint_names=None, parents=None,
+def load_motion(path: str | os.PathLike[str], *, fps: float | None = None, joint_names: Sequence[str] | None = None,
+                parents: npt.ArrayLike | None = None,
                 convention: str | None = None, root_offset: str | None = None,
                 joint_translation: str | None = None, fallback_fps: float | None = None) -> Motion:
     """Load a motion file (``.bvh``, ``.npy``, ``.npz``, ``.csv``).
@@ -78,7 +81,8 @@ def load_motion(path, *, fps: float | None = None, joint_names=None, parents=Non
     return _load_csv(path, fps, joint_names, parents)
 
 
-def _positions_motion(path, arr, fps, joint_names, parents):
+def _positions_motion(path: pathlib.Path, arr: npt.ArrayLike, fps: float | None, joint_names: Sequence[str] | None,
+                      parents: npt.ArrayLike | None) -> Motion:
     arr = np.asarray(arr)
     if arr.dtype.kind not in "fiu":
         raise InputError(f"expected a numeric array, found dtype {arr.dtype}", path=path)
@@ -105,7 +109,8 @@ def _positions_motion(path, arr, fps, joint_names, parents):
         raise InputError(exc.reason, path=path) from None
 
 
-def _load_npz(path, fps, joint_names, parents, fallback_fps=None):
+def _load_npz(path: pathlib.Path, fps: float | None, joint_names: Sequence[str] | None, parents: npt.ArrayLike | None,
+              fallback_fps: float | None = None) -> Motion:
     try:
         with np.load(path, allow_pickle=False) as data:
             contents = {k: data[k] for k in data.files}
@@ -125,7 +130,8 @@ def _load_npz(path, fps, joint_names, parents, fallback_fps=None):
     return _positions_motion(path, contents[key], fps, joint_names, parents)
 
 
-def _load_csv(path, fps, joint_names, parents):
+def _load_csv(path: pathlib.Path, fps: float | None, joint_names: Sequence[str] | None,
+              parents: npt.ArrayLike | None) -> Motion:
     import pandas as pd
 
     try:
@@ -157,10 +163,11 @@ def _load_csv(path, fps, joint_names, parents):
         raise InputError(f"expected a number, found {frame[col].iloc[row]!r}", path=path, line=row + 2, field=col)
     if fps is None and time is not None and len(time) > 1:
         fps = _clean_fps(float(np.median(np.diff(time))))
-    return _positions_motion(path, frame.to_numpy(dtype=np.float64), fps, joint_names or names, parents)
+    return _positions_motion(path, frame.to_numpy(dtype=np.float64), fps, joint_names or [str(n) for n in names],
+                             parents)
 
 
-def list_motion_files(folder, *, what: str | None = None) -> dict[str, pathlib.Path]:
+def list_motion_files(folder: str | os.PathLike[str], *, what: str | None = None) -> dict[str, pathlib.Path]:
     """The motion files directly in ``folder``, keyed by file stem, in name order.
 
     ``what`` names the folder's owner in error messages (e.g. ``"condition 'SysA'"``). InputError if the
@@ -184,7 +191,7 @@ def list_motion_files(folder, *, what: str | None = None) -> dict[str, pathlib.P
     return found
 
 
-def positions_joint_count(path) -> int | None:
+def positions_joint_count(path: str | os.PathLike[str]) -> int | None:
     """Joints of a ``.npy`` positions array without loading it (memory-mapped header), None if unknown."""
     arr = np.load(path, mmap_mode="r", allow_pickle=False)
     if arr.ndim == 3:
@@ -192,8 +199,8 @@ def positions_joint_count(path) -> int | None:
     return int(arr.shape[1] // 3) if arr.ndim == 2 else None
 
 
-def load_motion_folder(folder, *, convention: str | None = None, fps: float | None = None,
-                       joint_names=None) -> dict[str, Motion]:
+def load_motion_folder(folder: str | os.PathLike[str], *, convention: str | None = None, fps: float | None = None,
+                       joint_names: Sequence[str] | None = None) -> dict[str, Motion]:
     """Every motion file of a folder (or one file), keyed by file stem, loaded under ``convention``.
 
     ``fps`` and ``joint_names`` are used for positions files that do not store them (GENEA ``.npy``
@@ -214,7 +221,7 @@ def load_motion_folder(folder, *, convention: str | None = None, fps: float | No
     return out
 
 
-def save_motion(motion: Motion, path, *, end_sites: bool = False, precision: int = 6) -> None:
+def save_motion(motion: Motion, path: str | os.PathLike[str], *, end_sites: bool = False, precision: int = 6) -> None:
     """Write a motion: ``.bvh`` (hierarchical motion only), ``.npz``, ``.npy``, ``.csv``.
 
     ``.npz`` holds ``positions`` (T, J, 3), ``joint_names``, ``fps`` and ``parents``;

@@ -2,8 +2,11 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from evalsuite.errors import MotionError
 from evalsuite.motion.fk import check_conventions, forward_kinematics
@@ -62,11 +65,13 @@ class Motion:
             # positional motion has no channel values (is_hierarchical is False)
             self.values = None  # type: ignore[assignment]
             self._positions = positions
-        self._cache: dict = {}
+        self._cache: dict[tuple[str, bool], np.ndarray] = {}
 
     # --- construction -----------------------------------------------------------------
     @classmethod
-    def from_positions(cls, positions, joint_names, fps: float, parents=None, *, name=None, source=None):
+    def from_positions(cls, positions: npt.ArrayLike, joint_names: Iterable[str], fps: float,
+                       parents: npt.ArrayLike | None = None, *, name: str | None = None,
+                       source: str | None = None) -> Motion:
         """Positional motion from world positions ``(T, J, 3)`` (or ``(T, 3J)``)."""
         positions = np.asarray(positions, dtype=np.float64)
         joint_names = [str(n) for n in joint_names]
@@ -75,11 +80,11 @@ class Motion:
         if positions.ndim != 3 or positions.shape[1:] != (len(joint_names), 3):
             raise MotionError(f"positions of shape {positions.shape} do not fit {len(joint_names)} joint names; "
                               "expected (T, J, 3) or (T, 3J)")
-        if parents is None:
-            parents = -np.ones(len(joint_names), dtype=np.int64)
+        parent_index = (-np.ones(len(joint_names), dtype=np.int64) if parents is None
+                        else np.asarray(parents, dtype=np.int64))
         if len(set(joint_names)) != len(joint_names):
             raise MotionError("joint names must be unique")
-        skeleton = Skeleton(joint_names, parents, np.zeros((len(joint_names), 3)), [()] * len(joint_names))
+        skeleton = Skeleton(joint_names, parent_index, np.zeros((len(joint_names), 3)), [()] * len(joint_names))
         return cls(skeleton, None, fps, positions=positions, name=name, source=source)
 
     def with_values(self, values: np.ndarray, fps: float | None = None, skeleton: Skeleton | None = None) -> Motion:
@@ -87,8 +92,8 @@ class Motion:
         return Motion(skeleton or self.skeleton, values, fps or self.fps, root_offset=self.root_offset,
                       joint_translation=self.joint_translation, name=self.name, source=self.source)
 
-    def with_positions(self, positions: np.ndarray, fps: float | None = None, joint_names=None,
-                       parents=None) -> Motion:
+    def with_positions(self, positions: np.ndarray, fps: float | None = None, joint_names: Iterable[str] | None = None,
+                       parents: npt.ArrayLike | None = None) -> Motion:
         """A positional motion with these positions (joint names/parents kept unless given)."""
         names = list(joint_names) if joint_names is not None else self.joint_names
         par = parents if parents is not None else (self.parents if joint_names is None else None)
@@ -172,7 +177,7 @@ class Motion:
         except ValueError:
             raise MotionError(f"no joint named {name!r}; the motion has: {', '.join(self.joint_names)}") from None
 
-    def summary(self) -> dict:
+    def summary(self) -> dict[str, Any]:
         """What ``evalsuite info`` prints."""
         from evalsuite.motion.units import guess_units
 

@@ -4,6 +4,8 @@ All of them return a new Motion and leave the input unchanged.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -16,7 +18,7 @@ from evalsuite.motion.skeleton import POSITION_CHANNELS, Skeleton
 __all__ = ["select_joints", "drop_joints", "resample", "cut", "center"]
 
 
-def _resolve(motion: Motion, joints) -> list[str]:
+def _resolve(motion: Motion, joints: str | Sequence[str]) -> list[str]:
     try:
         return resolve_joints(joints, motion.joint_names)
     except KeyError as exc:
@@ -24,7 +26,7 @@ def _resolve(motion: Motion, joints) -> list[str]:
                           path=motion.source) from None
 
 
-def select_joints(motion: Motion, joints) -> Motion:
+def select_joints(motion: Motion, joints: str | Sequence[str]) -> Motion:
     """Keep the named joints (a preset name, ``"A,B,C"`` or a list), in the motion's order.
 
     If every kept joint's parent is kept too (e.g. dropping fingers or legs), a BVH motion
@@ -50,7 +52,7 @@ def select_joints(motion: Motion, joints) -> Motion:
     return motion.with_positions(pos, joint_names=[motion.joint_names[j] for j in keep], parents=new_parents)
 
 
-def drop_joints(motion: Motion, joints) -> Motion:
+def drop_joints(motion: Motion, joints: str | Sequence[str]) -> Motion:
     """Remove the named joints; see :func:`select_joints` for what the result holds."""
     drop = set(_resolve(motion, joints))
     return select_joints(motion, [n for n in motion.joint_names if n not in drop])

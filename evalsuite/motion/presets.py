@@ -10,6 +10,8 @@ reports; they name Trinity joints and, where present, the GENEA 2023 ones.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 GENEA2020_UPPER = [
     "Spine", "Spine1", "Spine2", "Spine3", "Neck", "Neck1", "Head",
     "RightShoulder", "RightArm", "RightForeArm", "RightHand",
@@ -44,7 +46,7 @@ PRESETS: dict[str, list[str]] = {
 OPTIONAL_MEMBER_PRESETS = {"wrists", "forearms", "hands"}
 
 
-def resolve_joints(spec, available: list[str]) -> list[str]:
+def resolve_joints(spec: str | Sequence[str], available: list[str]) -> list[str]:
     """Joint names from a preset name, a comma-separated string or a list of names.
 
     Raises ``KeyError`` listing the missing names (callers turn it into a MotionError).

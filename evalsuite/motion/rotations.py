@@ -15,6 +15,8 @@ Quaternions are scalar-last ``(x, y, z, w)`` as in scipy.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = [
@@ -30,7 +32,11 @@ __all__ = [
     "quaternion_slerp",
 ]
 
-def _rotation():
+# One entry of a matrix held as 9 entries: a constant 0.0/1.0 or an array over frames.
+Element = float | np.ndarray
+
+
+def _rotation() -> Any:
     # scipy.spatial takes ~0.4 s to import; forward kinematics never needs it.
     from scipy.spatial.transform import Rotation
 
@@ -42,7 +48,7 @@ def _rotation():
 # symbolic lets the axis matrices' zeros and ones skip their multiplications.
 
 
-def _axis_elements(axis: str, c, s, ns):
+def _axis_elements(axis: str, c: Element, s: Element, ns: Element) -> list[Element]:
     if axis == "X":
         return [1.0, 0.0, 0.0, 0.0, c, ns, 0.0, s, c]
     if axis == "Y":
@@ -52,7 +58,7 @@ def _axis_elements(axis: str, c, s, ns):
     raise ValueError(f"unknown rotation axis {axis!r}; expected X, Y or Z")
 
 
-def _product(x, y):
+def _product(x: Element, y: Element) -> Element | None:
     if isinstance(x, float):
         if x == 0.0:
             return None
@@ -64,7 +70,7 @@ def _product(x, y):
     return x * y
 
 
-def _sum(acc, term):
+def _sum(acc: Element | None, term: Element | None) -> Element | None:
     if term is None:
         return acc
     if acc is None:
@@ -74,7 +80,7 @@ def _sum(acc, term):
     return acc + term
 
 
-def multiply_elements(a: list, b: list) -> list:
+def multiply_elements(a: list[Element], b: list[Element]) -> list[Element]:
     """Product ``a @ b`` of two matrices held as 9 element entries (see module notes)."""
     out = []
     for i in range(3):
@@ -86,7 +92,7 @@ def multiply_elements(a: list, b: list) -> list:
     return out
 
 
-def euler_to_matrix_elements(angles: np.ndarray, axes: str, degrees: bool = True) -> list:
+def euler_to_matrix_elements(angles: np.ndarray, axes: str, degrees: bool = True) -> list[Element]:
     """Intrinsic rotation ``R = R_axes[0](a0) @ R_axes[1](a1) @ ...`` as 9 element arrays.
 
     ``angles`` has shape ``(len(axes), ...)``; each returned entry has the trailing shape
@@ -109,7 +115,7 @@ def euler_to_matrix_elements(angles: np.ndarray, axes: str, degrees: bool = True
     return result
 
 
-def elements_to_array(elements: list, shape: tuple) -> np.ndarray:
+def elements_to_array(elements: list[Element], shape: tuple[int, ...]) -> np.ndarray:
     """Stack 9 element entries into an array of shape ``shape + (3, 3)``."""
     out = np.empty(shape + (9,), dtype=np.float64)
     for k, e in enumerate(elements):
@@ -124,7 +130,7 @@ def euler_to_matrix(angles: np.ndarray, axes: str, degrees: bool = True) -> np.n
     return elements_to_array(euler_to_matrix_elements(moved, axes, degrees), angles.shape[:-1])
 
 
-def _flat(m: np.ndarray):
+def _flat(m: np.ndarray) -> tuple[np.ndarray, tuple[int, ...]]:
     m = np.asarray(m, dtype=np.float64)
     if m.shape[-2:] != (3, 3):
         raise ValueError(f"expected rotation matrices of shape (..., 3, 3), got {m.shape}")
@@ -135,31 +141,31 @@ def matrix_to_euler(m: np.ndarray, axes: str, degrees: bool = True) -> np.ndarra
     """Rotation matrices to intrinsic Euler angles in ``axes`` order (3 axes)."""
     flat, lead = _flat(m)
     eul = _rotation().from_matrix(flat).as_euler(axes.upper(), degrees=degrees)
-    return eul.reshape(lead + (3,))
+    return np.asarray(eul.reshape(lead + (3,)))
 
 
 def matrix_to_quaternion(m: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(..., 3, 3)`` to unit quaternions ``(..., 4)`` (x, y, z, w)."""
     flat, lead = _flat(m)
-    return _rotation().from_matrix(flat).as_quat().reshape(lead + (4,))
+    return np.asarray(_rotation().from_matrix(flat).as_quat().reshape(lead + (4,)))
 
 
 def quaternion_to_matrix(q: np.ndarray) -> np.ndarray:
     """Quaternions ``(..., 4)`` (x, y, z, w; normalised here) to matrices ``(..., 3, 3)``."""
     q = np.asarray(q, dtype=np.float64)
-    return _rotation().from_quat(q.reshape(-1, 4)).as_matrix().reshape(q.shape[:-1] + (3, 3))
+    return np.asarray(_rotation().from_quat(q.reshape(-1, 4)).as_matrix().reshape(q.shape[:-1] + (3, 3)))
 
 
 def matrix_to_expmap(m: np.ndarray) -> np.ndarray:
     """Rotation matrices to exponential maps (axis * angle in radians), ``(..., 3)``."""
     flat, lead = _flat(m)
-    return _rotation().from_matrix(flat).as_rotvec().reshape(lead + (3,))
+    return np.asarray(_rotation().from_matrix(flat).as_rotvec().reshape(lead + (3,)))
 
 
 def expmap_to_matrix(v: np.ndarray) -> np.ndarray:
     """Exponential maps (axis * angle in radians) ``(..., 3)`` to matrices ``(..., 3, 3)``."""
     v = np.asarray(v, dtype=np.float64)
-    return _rotation().from_rotvec(v.reshape(-1, 3)).as_matrix().reshape(v.shape[:-1] + (3, 3))
+    return np.asarray(_rotation().from_rotvec(v.reshape(-1, 3)).as_matrix().reshape(v.shape[:-1] + (3, 3)))
 
 
 def matrix_to_6d(m: np.ndarray) -> np.ndarray:
@@ -201,4 +207,4 @@ def quaternion_slerp(q0: np.ndarray, q1: np.ndarray, w: np.ndarray) -> np.ndarra
     a = np.where(near, 1.0 - w, np.sin((1.0 - w) * theta) / safe)
     b = np.where(near, w, np.sin(w * theta) / safe)
     out = a * q0 + b * q1
-    return out / np.linalg.norm(out, axis=-1, keepdims=True)
+    return np.asarray(out / np.linalg.norm(out, axis=-1, keepdims=True))

@@ -37,7 +37,7 @@ class Skeleton:
     end_site_parents: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     end_site_offsets: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.parents = np.asarray(self.parents, dtype=np.int64)
         self.offsets = np.asarray(self.offsets, dtype=np.float64).reshape(-1, 3)
         self.end_site_parents = np.asarray(self.end_site_parents, dtype=np.int64)
@@ -104,7 +104,7 @@ class Skeleton:
         return Skeleton(list(self.names), self.parents.copy(), self.offsets.copy(), list(self.channels),
                         self.end_site_parents.copy(), self.end_site_offsets.copy())
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         if not isinstance(other, Skeleton):
             return NotImplemented
         return (self.names == other.names and np.array_equal(self.parents, other.parents)

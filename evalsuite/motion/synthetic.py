@@ -27,7 +27,7 @@ def humanoid_skeleton(n_joints: int = 60, rotation_order: str = "ZXY") -> Skelet
     rot = tuple(f"{a}rotation" for a in rotation_order.upper())
     names, parents, offsets = [], [], []
 
-    def add(name, parent, offset):
+    def add(name: str, parent: str | None, offset: tuple[float, float, float]) -> None:
         names.append(name)
         parents.append(parent if parent is None else names.index(parent))
         offsets.append(offset)

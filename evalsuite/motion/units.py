@@ -1,6 +1,8 @@
 """A guess of a motion's length unit from the figure's height (BVH files do not say)."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 # Plausible adult figure heights (full body) in each unit; upper-body skeletons are shorter,
@@ -12,6 +14,9 @@ _RANGES = [
     ("millimetres", 400.0, 2600.0),
 ]
 
+if TYPE_CHECKING:
+    from evalsuite.motion.motion import Motion
+
 
 def figure_height(positions: np.ndarray, up_axis: int = 1) -> float:
     """Median over frames of the vertical extent of all joints."""
@@ -21,7 +26,7 @@ def figure_height(positions: np.ndarray, up_axis: int = 1) -> float:
     return float(np.median(extent))
 
 
-def guess_units(motion, up_axis: int = 1) -> str:
+def guess_units(motion: Motion, up_axis: int = 1) -> str:
     """E.g. ``"centimetres (figure height 172.3 units, Y up)"``."""
     pos = motion.positions()[:: max(1, motion.n_frames // 200)]
     height = figure_height(pos, up_axis)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
@@ -24,6 +24,7 @@ __all__ = ["MetricInfo", "MetricFamily", "SequenceContext", "ReduceContext", "pe
            "weighted_mean_boot", "bootstrap_weights"]
 
 NAN = float("nan")
+T = TypeVar("T")
 NAN_CI = (NAN, NAN)
 
 
@@ -53,10 +54,10 @@ class MetricFamily:
     def measure(self, ctx: SequenceContext) -> None:
         """Write this family's per-sequence summaries into ``ctx.record``."""
 
-    def fold(self, index: int, cond: str, record: dict, natural: dict, acc: dict) -> None:
+    def fold(self, index: int, cond: str, record: dict[str, Any], natural: dict[str, Any], acc: dict[str, Any]) -> None:
         """Fold bulky parts of ``record`` into ``acc`` (in task order); default: nothing."""
 
-    def drop(self, record: dict) -> None:
+    def drop(self, record: dict[str, Any]) -> None:
         """Remove what :meth:`fold` has used from ``record`` (not called when bootstrapping needs it)."""
 
     def reduce(self, ctx: ReduceContext) -> None:
@@ -73,7 +74,7 @@ class SequenceContext:
     """
 
     def __init__(self, motion: Any, pos: np.ndarray, setup: Any, conv: Convention, natural_pos: np.ndarray | None,
-                 audio_onsets: np.ndarray | None, natural_cache: dict):
+                 audio_onsets: np.ndarray | None, natural_cache: dict[Any, Any]):
         self.motion = motion
         self.pos = pos
         self.fps = float(motion.fps)
@@ -89,10 +90,11 @@ class SequenceContext:
     def families(self) -> set[str]:
         return set(self.setup.families)
 
-    def memo(self, key: str, compute: Callable[[], Any]) -> Any:
+    def memo(self, key: str, compute: Callable[[], T]) -> T:
+        """``compute()``, computed once per file under ``key``."""
         if key not in self.cache:
             self.cache[key] = compute()
-        return self.cache[key]
+        return cast(T, self.cache[key])
 
     def norms(self, order: int) -> np.ndarray:
         """Per-step derivative norms ``(T - order, J)`` in the convention's unit (computed once per file)."""
@@ -133,16 +135,16 @@ class ReduceContext:
     cond: str
     reference: str
     names: list[str]
-    recs: dict[str, dict]
-    ref: dict[str, dict]
+    recs: dict[str, dict[str, Any]]
+    ref: dict[str, dict[str, Any]]
     setup: Any
     conv: Convention
     weights: np.ndarray | None
-    acc: dict
-    summary: list[dict] = field(default_factory=list)
-    per_sequence: list[dict] = field(default_factory=list)
-    per_joint: list[dict] = field(default_factory=list)
-    histograms: list[dict] = field(default_factory=list)
+    acc: dict[str, Any]
+    summary: list[dict[str, Any]] = field(default_factory=list)
+    per_sequence: list[dict[str, Any]] = field(default_factory=list)
+    per_joint: list[dict[str, Any]] = field(default_factory=list)
+    histograms: list[dict[str, Any]] = field(default_factory=list)
     issues: list[str] = field(default_factory=list)
     info: dict[str, MetricInfo] = field(default_factory=dict)
     seed: int = 0

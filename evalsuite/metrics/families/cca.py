@@ -60,7 +60,7 @@ class CCAFamily(MetricFamily):
         if halves is not None:
             ctx.record["cca_halves"] = halves[0]
 
-    def fold(self, index: int, cond: str, record: dict, natural: dict, acc: dict) -> None:
+    def fold(self, index: int, cond: str, record: dict[str, Any], natural: dict[str, Any], acc: dict[str, Any]) -> None:
         halves = record.pop("cca_halves", None)
         if halves is None:
             return
@@ -74,11 +74,11 @@ class CCAFamily(MetricFamily):
             ctx.add("cca", value, n=ctx.n)
 
 
-def _add(acc: dict, key: str, m: Moments) -> None:
+def _add(acc: dict[str, Any], key: str, m: Moments) -> None:
     acc[key] = m if key not in acc else combine_moments([acc[key], m])
 
 
-def _cca_value(acc: dict, dx: int, in_sample: bool, ctx: ReduceContext) -> float:
+def _cca_value(acc: dict[str, Any], dx: int, in_sample: bool, ctx: ReduceContext) -> float:
     """In-sample, or cross-fitted over two folds of sequences (both ways, averaged); when a fold is empty
     (a single sequence), over the first and second halves in time."""
     try:

@@ -3,6 +3,7 @@ Div_k (:mod:`evalsuite.metrics.distribution`)."""
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
 import numpy as np
 
@@ -39,13 +40,13 @@ class DistributionFamily(MetricFamily):
         ctx.record["l1_sum"] = l1div_parts(ctx.pos)[0]
         ctx.record["div_k"] = div_k_sequence(ctx.pos)
 
-    def fold(self, index: int, cond: str, record: dict, natural: dict, acc: dict) -> None:
+    def fold(self, index: int, cond: str, record: dict[str, Any], natural: dict[str, Any], acc: dict[str, Any]) -> None:
         for key in _FD.values():
             if key in record:
                 for k, m in ((key, record[key]), ("natural_" + key, natural[key])):
                     acc[k] = m if k not in acc else combine_moments([acc[k], m])
 
-    def drop(self, record: dict) -> None:
+    def drop(self, record: dict[str, Any]) -> None:
         for key in _FD.values():
             record.pop(key, None)
 
@@ -59,7 +60,7 @@ class DistributionFamily(MetricFamily):
                 pc = [ctx.recs[s].get(key) for s in ctx.names]
                 pr = [ctx.ref[s].get(key) for s in ctx.names]
 
-                def resampled(w: np.ndarray, pc: list = pc, pr: list = pr) -> list[float]:
+                def resampled(w: np.ndarray, pc: list[Any] = pc, pr: list[Any] = pr) -> list[float]:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore", FrechetWarning)
                         return [frechet_from_moments(combine_moments(pr, wb), combine_moments(pc, wb)) for wb in w]
