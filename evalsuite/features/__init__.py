@@ -1,0 +1,1 @@
+"""Speech features as the reference gesture generators compute them (recipes by name; in progress)."""
