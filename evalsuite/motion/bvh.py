@@ -11,20 +11,25 @@ inconsistency does a line-by-line pass run to report exactly where the file is w
 """
 from __future__ import annotations
 
-import io
 import math
 import os
 import re
-import warnings
 
 import numpy as np
 
 from evalsuite.errors import BVHError
+from evalsuite.motion.bvh_frames import NUMBER_RE, frames_fast, frames_slow
 from evalsuite.motion.skeleton import Skeleton, canonical_channel
 
 __all__ = ["parse_bvh", "read_bvh_file", "format_bvh", "write_bvh"]
 
 _FRAMES_RE = re.compile(r"^\s*Frames\s*:\s*(\S*)\s*$", re.IGNORECASE)
+COUNT_RE = re.compile(r"^\d+$", re.ASCII)
+# Limits far beyond real files, so that a damaged or hostile file fails fast with a clear message.
+MAX_DEPTH = 256            # joints nested inside each other
+MAX_JOINTS = 10_000
+MAX_LINE_CHARS = 1_000_000
+MAX_FPS = 100_000.0
 _FRAME_TIME_RE = re.compile(r"^\s*Frame\s+Time\s*:\s*(\S*)\s*$", re.IGNORECASE)
 
 
@@ -66,10 +71,9 @@ class _Tokens:
 
     def number(self, what: str) -> float:
         tok, line = self.next(what)
-        try:
-            value = float(tok)
-        except ValueError:
-            raise self.error(f"expected a number for {what}, found {tok!r}", line) from None
+        if not NUMBER_RE.match(tok):
+            raise self.error(f"expected a number for {what}, found {tok!r}", line)
+        value = float(tok)
         if not math.isfinite(value):
             raise self.error(f"expected a finite number for {what}, found {tok!r}", line)
         return value
@@ -84,6 +88,7 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
     end_parents: list[int] = []
     end_offsets: list[tuple[float, float, float]] = []
     name_lines: dict[str, int] = {}
+    depths: list[int] = []
 
     def offset_values(owner: str) -> tuple[float, float, float]:
         x, y, z = (tokens.number(f"OFFSET {axis} of {owner}") for axis in "xyz")
@@ -103,6 +108,13 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
         name_lines[name] = keyword_line
         tokens.expect("{")
         index = len(names)
+        depth = 0 if parent < 0 else depths[parent] + 1
+        if depth > MAX_DEPTH:
+            raise tokens.error(f"joint {name!r} is nested {depth} levels deep; real skeletons are far shallower "
+                               f"(limit {MAX_DEPTH})", keyword_line)
+        if index >= MAX_JOINTS:
+            raise tokens.error(f"more than {MAX_JOINTS:,} joints; real skeletons have far fewer", keyword_line)
+        depths.append(depth)
         names.append(name)
         parents.append(parent)
         offsets.append((0.0, 0.0, 0.0))
@@ -120,7 +132,7 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
                 if seen_channels:
                     raise tokens.error(f"joint {name!r} has a second CHANNELS line", line)
                 count_tok, count_line = tokens.next("the channel count")
-                if not count_tok.isdigit():
+                if not COUNT_RE.match(count_tok):
                     raise tokens.error(f"expected a whole channel count after CHANNELS, found {count_tok!r}",
                                        count_line)
                 chans = []
@@ -174,90 +186,17 @@ def _read_text(path: str, data: bytes) -> str:
     return data.decode("utf-8", errors="replace")
 
 
-def _frames_slow(lines: list[str], first_line: int, n_frames: int, skeleton: Skeleton, path: str) -> np.ndarray:
-    """Line-by-line parse that reports exactly where the frame data is wrong."""
-    n_ch = skeleton.n_channels
-    names = skeleton.channel_names()
-    out = np.empty((n_frames, n_ch), dtype=np.float64)
-    frame = 0
-    for offset_, line in enumerate(lines):
-        number = first_line + offset_
-        fields = line.split()
-        if not fields:
-            continue
-        if frame >= n_frames:
-            raise BVHError(f"more frame lines than 'Frames: {n_frames}' declares; expected {n_frames} frames",
-                           path=path, line=number)
-        if len(fields) != n_ch:
-            raise BVHError(f"frame {frame} has {len(fields)} values; expected {n_ch} "
-                           f"(one per channel of the hierarchy)", path=path, line=number)
-        for col, tok in enumerate(fields):
-            try:
-                value = float(tok)
-            except ValueError:
-                raise BVHError(f"expected a number, found {tok!r}", path=path, line=number,
-                               field=f"frame {frame}, channel '{names[col]}'") from None
-            if not math.isfinite(value):
-                raise BVHError(f"expected a finite number, found {tok!r}", path=path, line=number,
-                               field=f"frame {frame}, channel '{names[col]}'")
-            out[frame, col] = value
-        frame += 1
-    if frame != n_frames:
-        raise BVHError(f"the file is truncated or 'Frames:' is wrong: 'Frames: {n_frames}' but {frame} frame lines "
-                       "found", path=path, line=first_line + len(lines) - 1 if lines else first_line)
-    return out
-
-
-def _frames_fast(body: bytes, n_frames: int, n_ch: int) -> np.ndarray | None:
-    """Vectorised parse; ``None`` when anything looks off (the slow path then explains).
-
-    First pandas' C tokenizer with a single-space separator (what most writers emit; it
-    checks the value count of every line), then numpy's whitespace-agnostic reader with a
-    line count, for files with tabs or runs of spaces.
-    """
-    if n_frames == 0 or n_ch == 0:
-        return None
-    import pandas as pd
-
-    stripped = body.strip()
-    if stripped.count(b"\n") + 1 != n_frames:
-        return None
-    try:
-        frame = pd.read_csv(io.BytesIO(stripped), sep=" ", header=None, engine="c", dtype=np.float64,
-                            na_filter=True, skip_blank_lines=False)
-        arr = frame.to_numpy()
-        if arr.shape[1] == n_ch + 1 and np.isnan(arr[:, -1]).all():
-            arr = arr[:, :-1]  # trailing space at the end of every line
-        if arr.shape == (n_frames, n_ch) and np.isfinite(arr).all():
-            # Column-major as pandas builds it: no copy, and FK reads whole channel columns.
-            return np.asarray(arr)
-    except (ValueError, pd.errors.ParserError):
-        pass
-    if not _every_line_has(stripped, n_ch):
-        return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # older numpy warns when it stops at a bad token
-            flat = np.fromstring(stripped.decode("latin-1"), dtype=np.float64, sep=" ")
-    except ValueError:  # newer numpy raises instead
-        return None
-    if flat.size != n_frames * n_ch or not np.isfinite(flat).all():
-        return None
-    return flat.reshape(n_frames, n_ch)
-
-
-def _every_line_has(data: bytes, n_tokens: int) -> bool:
-    """Whether every line holds exactly ``n_tokens`` whitespace-separated tokens (vectorised).
-
-    A right total alone could hide a line with one value too many next to one with one too
-    few, which would silently shift channels between frames.
-    """
-    arr = np.frombuffer(data, dtype=np.uint8)
-    space = (arr == 32) | ((arr >= 9) & (arr <= 13))  # space, \t, \n, \v, \f, \r
-    token_starts = np.flatnonzero(~space & np.concatenate(([True], space[:-1])))
-    line_ends = np.append(np.flatnonzero(arr == 10), len(arr))
-    per_line = np.diff(np.concatenate(([0], np.searchsorted(token_starts, line_ends))))
-    return bool(np.all(per_line == n_tokens))
+def _check_line_lengths(data: bytes, path: str) -> None:
+    """Refuse lines no BVH has (a damaged or hostile file), before any per-line work."""
+    if len(data) <= MAX_LINE_CHARS:
+        return
+    ends = np.flatnonzero(np.frombuffer(data, dtype=np.uint8) == 10)
+    bounds = np.concatenate(([-1], ends, [len(data)]))
+    lengths = np.diff(bounds) - 1
+    longest = int(np.argmax(lengths))
+    if lengths[longest] > MAX_LINE_CHARS:
+        raise BVHError(f"line of {int(lengths[longest]):,} characters; BVH lines are far shorter (limit "
+                       f"{MAX_LINE_CHARS:,})", path=path, line=longest + 1)
 
 
 def parse_bvh(data: bytes | str, path: str = "<string>") -> tuple[Skeleton, np.ndarray, float]:
@@ -265,6 +204,9 @@ def parse_bvh(data: bytes | str, path: str = "<string>") -> tuple[Skeleton, np.n
     path = os.fspath(path)
     if isinstance(data, str):
         data = data.encode("utf-8")
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]  # a UTF-8 byte-order mark some editors write
+    _check_line_lengths(data, path)
     match = re.search(rb"^[ \t]*MOTION[ \t]*\r?$", data, flags=re.MULTILINE | re.IGNORECASE)
     if match is None:
         header_lines = _read_text(path, data).splitlines()
@@ -301,20 +243,22 @@ def parse_bvh(data: bytes | str, path: str = "<string>") -> tuple[Skeleton, np.n
             raise BVHError(f"expected {what}, found {line.strip()[:60]!r}", path=path, line=line_no)
         found[key] = (m.group(1), line_no)
     frames_tok, frames_line = found["frames"]
-    if not frames_tok.isdigit():
+    if not COUNT_RE.match(frames_tok):
         raise BVHError(f"expected a whole number of frames, found {frames_tok!r}", path=path, line=frames_line,
                        field="Frames")
     n_frames = int(frames_tok)
     time_tok, time_line = found["time"]
-    try:
-        frame_time = float(time_tok)
-    except ValueError:
-        frame_time = float("nan")
-    if not (math.isfinite(frame_time) and frame_time > 0):
-        raise BVHError(f"expected a positive frame time in seconds, found {time_tok!r}", path=path,
-                       line=time_line, field="Frame Time")
+    frame_time = float(time_tok) if NUMBER_RE.match(time_tok) else float("nan")
+    if not (math.isfinite(frame_time) and frame_time >= 1.0 / MAX_FPS):
+        raise BVHError(f"expected a positive frame time in seconds (at most {MAX_FPS:g} frames per second), "
+                       f"found {time_tok!r}", path=path, line=time_line, field="Frame Time")
 
     body = rest[pos:]
+    # Check the declared count against the data before allocating for it.
+    available = body.count(b"\n") + (0 if body.endswith(b"\n") else 1)
+    if n_frames and skeleton.n_channels and n_frames > available:
+        raise BVHError(f"'Frames: {n_frames}' but the file has only {available} lines of frame data; "
+                       "the file is truncated or 'Frames:' is wrong", path=path, line=frames_line, field="Frames")
     nul = body.find(b"\x00")
     if nul >= 0:
         raise BVHError("binary data (NUL byte) in the frame data; expected text", path=path,
@@ -325,10 +269,10 @@ def parse_bvh(data: bytes | str, path: str = "<string>") -> tuple[Skeleton, np.n
             bad = len(body[: body.index(body.strip()[:1])].split(b"\n"))
             raise BVHError("frame data found but the hierarchy has no channels", path=path, line=time_line + bad)
         return skeleton, np.zeros((n_frames, 0)), frame_time
-    values = _frames_fast(body, n_frames, skeleton.n_channels)
+    values = frames_fast(body, n_frames, skeleton.n_channels)
     if values is None:
         lines = body.decode("utf-8", errors="replace").split("\n")
-        values = _frames_slow(lines, time_line + 1, n_frames, skeleton, path)
+        values = frames_slow(lines, time_line + 1, n_frames, skeleton, path)
     return skeleton, values, frame_time
 
 

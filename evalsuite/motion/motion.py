@@ -14,11 +14,24 @@ from evalsuite.motion.skeleton import Skeleton
 
 
 def _clean_fps(frame_time: float) -> float:
-    """fps from a BVH frame time; ``0.0333333`` gives 30.0, not 30.0000003."""
+    """fps from a frame time in seconds, snapped to a whole rate where the value is that rate's frame time as
+    written: ``0.0333333`` gives 30.0, not 30.0000003, and ``0.03333`` (how GENEA and many exporters write
+    30 fps) gives 30.0, not 30.003.
+
+    Two rules: the rate is within 1e-4 (relative) of a whole number, or the frame time printed with its
+    shortest decimal digits (``repr``) equals a whole rate's frame time rounded to those digits (rates 1-1000).
+    """
     fps = 1.0 / frame_time
     nearest = round(fps)
     if nearest > 0 and abs(fps - nearest) <= 1e-4 * nearest:
         return float(nearest)
+    printed = repr(float(frame_time))
+    if "e" not in printed and "." in printed:
+        decimals = len(printed.partition(".")[2])
+        if decimals >= 2:
+            for rate in sorted(range(max(1, int(fps) - 2), min(1000, int(fps) + 3) + 1), key=lambda r: abs(r - fps)):
+                if round(1.0 / rate, decimals) == float(printed):
+                    return float(rate)
     return fps
 
 
