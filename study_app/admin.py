@@ -13,7 +13,7 @@ from flask import Blueprint, Response, current_app, redirect, render_template, r
 from study_app.context import get_store, get_study
 from study_app.export import raw_json, result_rows, results_csv
 from study_app.pages import get_kind
-from study_app.security import admin_required, check_token
+from study_app.security import admin_logins, admin_required, check_token
 from study_app.storage import utcnow
 
 bp = Blueprint("admin", __name__)
@@ -23,11 +23,20 @@ bp = Blueprint("admin", __name__)
 def login():
     error = ""
     if request.method == "POST":
+        address, logins = request.remote_addr or "unknown", admin_logins()
+        wait = logins.retry_after(address)
+        if wait:
+            resp = Response(render_template("admin_login.html", error="Too many wrong tokens from this address; "
+                                            f"try again in {wait} s."), status=429)
+            resp.headers["Retry-After"] = str(wait)
+            return resp
         given = request.form.get("token", "")
         if isinstance(given, str) and check_token(given, current_app.config["ADMIN_TOKEN"]):
+            logins.succeeded(address)
             session.clear()
             session["admin"] = True
             return redirect(url_for("admin.overview"))
+        logins.failed(address)
         error = "Wrong token."
     return render_template("admin_login.html", error=error), (403 if error else 200)
 

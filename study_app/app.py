@@ -93,7 +93,7 @@ def create_app(config: dict) -> Flask:
 
     for code, message in ((400, "Bad request."), (403, "You cannot open this page."),
                           (404, "Not found."), (405, "Method not allowed."),
-                          (413, "Request too large.")):
+                          (413, "Request too large."), (429, "Too many attempts; try again later.")):
         app.register_error_handler(code, lambda exc, c=code, m=message: _error(c, m))
 
     @app.after_request

@@ -16,7 +16,7 @@ from flask import Blueprint, abort, jsonify, redirect, render_template, request,
 from study_app.answers import n_slots, parse_events, parse_token
 from study_app.context import get_store, get_study
 from study_app.pages import get_kind
-from study_app.payload import PayloadError
+from study_app.payload import PayloadError, parse_json_object
 from study_app.submission import validate_submission
 
 bp = Blueprint("participant", __name__)
@@ -168,11 +168,8 @@ def _ended(sess):
     return _message("Time expired", "Your place in this study has expired. Please return the task.", 410)
 
 
-def _json_body():
-    body = request.get_json(silent=True)
-    if not isinstance(body, dict):
-        raise PayloadError("expected a JSON object")
-    return body
+def _json_body() -> dict:
+    return parse_json_object(request.get_data(cache=True))
 
 
 @bp.route("/s/<sid>/answer/<int:index>", methods=["POST"])
@@ -199,6 +196,8 @@ def answer(sid, index):
     if status == "missing":
         return jsonify(error="this session does not exist (any more); open the study link again"), 404
     nxt = url_for("participant.page", sid=sid)
+    if status == "ahead":
+        return jsonify(error="this page is not open yet; answer the current page first", next=nxt), 409
     if status == "conflict":
         return jsonify(error="this page was already answered; the stored answer is kept",
                        next=nxt), 409
@@ -241,6 +240,8 @@ def events(sid, index):
     sess, pages = store.load(sid)
     if sess is None or not 0 <= index <= min(sess.current_page, len(pages) - 1):
         abort(404)
+    if sess.status != "active":
+        return jsonify(error=f"this session has ended ({sess.status}); events are no longer recorded"), 409
     try:
         body = _json_body()
         if set(body) - {"events"}:

@@ -5,7 +5,9 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["PayloadError", "require_dict", "only_keys", "int_in"]
+__all__ = ["PayloadError", "require_dict", "only_keys", "int_in", "parse_json_object", "MAX_JSON_DEPTH"]
+
+MAX_JSON_DEPTH = 16   # answers, drafts and event lists are shallow; deeper input is not ours
 
 
 class PayloadError(ValueError):
@@ -22,6 +24,41 @@ def only_keys(obj: dict, allowed: Iterable[str], what: str) -> None:
     extra = sorted(set(obj) - set(allowed))
     if extra:
         raise PayloadError(f"{what}: unexpected field {extra[0]!r}")
+
+
+def _no_constant(name: str) -> Any:
+    raise PayloadError(f"{name} is not a number JSON allows (NaN and Infinity are refused)")
+
+
+def _depth(value: Any) -> int:
+    """Nesting depth of parsed JSON, without recursion."""
+    deepest, stack = 0, [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, (dict, list)):
+            deepest = max(deepest, depth)
+            stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return deepest
+
+
+def parse_json_object(raw: bytes) -> dict:
+    """The request body as a JSON object: strict JSON (no NaN/Infinity), nested at most
+    :data:`MAX_JSON_DEPTH` levels; anything else is a :class:`PayloadError`, never a RecursionError."""
+    import json
+
+    try:
+        value = json.loads(raw, parse_constant=_no_constant)
+    except RecursionError:
+        raise PayloadError(f"JSON nested too deeply (at most {MAX_JSON_DEPTH} levels)") from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        if isinstance(exc, PayloadError):
+            raise
+        raise PayloadError(f"expected a JSON object ({exc})") from None
+    if not isinstance(value, dict):
+        raise PayloadError("expected a JSON object")
+    if _depth(value) > MAX_JSON_DEPTH:
+        raise PayloadError(f"JSON nested too deeply (at most {MAX_JSON_DEPTH} levels)")
+    return value
 
 
 def int_in(value: Any, lo: int, hi: int, what: str) -> int:

@@ -373,7 +373,8 @@ class Store:
         :class:`~study_app.submission.Submission` or raises; ``played(kind)`` gives the media slots with an
         event of that kind on the page. The session then moves on as :func:`study_app.policy.after_answer`
         says. Returns ``(status, answer, session)`` with status ``"stored"``, ``"duplicate"`` (same token
-        seen before: the first answer is returned), or ``"conflict"`` (this page already has a different
+        seen before: the first answer is returned), ``"ahead"`` (a page after the current one), ``"missing"``
+        (no such session) or ``"conflict"`` (this page already has a different
         answer / is not the current page).
         """
         for attempt in range(3):
@@ -392,6 +393,8 @@ class Store:
                         return "duplicate", prior, sess
                     now = utcnow()
                     self._check_expiry(db, sess, now)
+                    if sess.status == "active" and page_index > sess.current_page:
+                        return "ahead", None, sess
                     if sess.status != "active" or sess.current_page != page_index:
                         return "conflict", None, sess
                     plan = _plan(db, sess)
