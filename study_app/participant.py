@@ -11,7 +11,7 @@ import secrets
 import urllib.parse
 from functools import partial
 
-from flask import Blueprint, abort, jsonify, redirect, render_template, request, session, url_for
+from flask import Blueprint, abort, current_app, jsonify, redirect, render_template, request, session, url_for
 
 from study_app.answers import n_slots, parse_events, parse_token
 from study_app.context import get_store, get_study
@@ -38,6 +38,20 @@ def _own(sid: str):
     """Refuse any session this browser did not start (or resume via its platform id)."""
     if not isinstance(sid, str) or sid not in session.get("sids", []):
         abort(403)
+
+
+# The platform field that identifies one attempt (the same on every link of that attempt).
+ATTEMPT_FIELD = {"prolific": "SESSION_ID", "mturk": "assignmentId"}
+
+
+def _may_resume(sess, platform_data: dict) -> bool:
+    """This browser holds the session, or brings the same platform attempt id."""
+    if sess.id in session.get("sids", []):
+        return True
+    field = ATTEMPT_FIELD.get(sess.platform)
+    if field is None:       # anonymous: the participant id came from this browser's own cookie
+        return True
+    return bool(platform_data.get(field)) and (sess.platform_data or {}).get(field) == platform_data.get(field)
 
 
 def _remember(sid: str):
@@ -109,6 +123,14 @@ def start(study_id):
         if not study.resume:
             return _message("Already started", "You have already started this study; it cannot be "
                             "started again.", 409)
+        if not _may_resume(sess, platform_data):
+            # A participant id alone never opens an existing session: the browser must hold it (its
+            # cookie) or bring the same platform session (Prolific SESSION_ID, MTurk assignmentId).
+            current_app.logger.warning("study %s: refused to resume session %s of participant %s from "
+                                       "another browser without its platform session id", study.id, sess.id,
+                                       participant)
+            return _message("Already in progress", "This study is already in progress in another browser "
+                            "or tab for this participant id. Please continue it there.", 409)
     _remember(sess.id)
     return redirect(url_for("participant.page", sid=sess.id))
 

@@ -105,3 +105,18 @@ def test_admin_token_guessing_is_throttled_per_address(app):
     r = client.post("/admin/login", data={"token": "wrong", "csrf_token": _csrf(client)})
     assert r.status_code == 429
     assert int(r.headers["Retry-After"]) > 0
+
+
+def test_a_participant_id_alone_does_not_open_someone_elses_session(app):
+    victim = _entered(app, "5f3a1c9e8b7d6a5f4e3d2c10")
+    # a fresh browser with the victim's Prolific id but another study session id
+    attacker = h.Participant(app.test_client(), "5f3a1c9e8b7d6a5f4e3d2c10")
+    r = attacker.get("/start/gesture-test?PROLIFIC_PID=5f3a1c9e8b7d6a5f4e3d2c10&STUDY_ID=st5f3a1c9e8b7d6a5f4e3d2c10"
+                     "&SESSION_ID=forged")
+    assert r.status_code == 409
+    assert "already in progress" in r.get_data(as_text=True)
+    assert attacker.client.get(f"/s/{victim.sid}/").status_code == 403
+    # the same platform attempt (same SESSION_ID) from another browser resumes, as Prolific's own links do
+    same = h.Participant(app.test_client(), "5f3a1c9e8b7d6a5f4e3d2c10")
+    assert same.enter().status_code == 302
+    assert same.sid == victim.sid
