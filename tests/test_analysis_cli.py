@@ -236,3 +236,15 @@ def test_everyone_excluded_gives_messages_and_no_nan(tmp_path):
     for p in text_outputs(tmp_path / "o"):
         text = html_without_images(p) if p.suffix == ".html" else p.read_text()
         assert not re.search(r"\bnan\b", text, re.IGNORECASE), p.name
+
+
+def test_no_figures_still_writes_every_table(tmp_path):
+    """--no-figures skips the PNGs only: the significance matrices are tables (docs/analysis.md)."""
+    with_figs, without = tmp_path / "with", tmp_path / "without"
+    assert CliRunner().invoke(main, ["analyze", str(SAMPLE), "-o", str(with_figs)]).exit_code == 0
+    res = CliRunner().invoke(main, ["analyze", str(SAMPLE), "-o", str(without), "--no-figures"])
+    assert res.exit_code == 0, res.output
+    tables = sorted(p.name for p in with_figs.glob("*.csv"))
+    assert any(name.startswith("significance_") for name in tables)
+    assert sorted(p.name for p in without.glob("*.csv")) == tables
+    assert not list(without.glob("figures/*.png"))

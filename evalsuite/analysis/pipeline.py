@@ -231,13 +231,14 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
         parts = [report.html_table(T["ratings"]), "<p>Pairwise Wilcoxon signed-rank tests:</p>",
                  report.html_table(T["ratings_pairwise"])]
         mu = data[data["page_type"] == "mushra"]
-        if opt.figures:
-            for q in sorted(mu["question"].unique()):
+        for q in sorted(mu["question"].unique()):
+            conds = T["ratings"].loc[T["ratings"]["question"] == q].sort_values(
+                "median", ascending=False)["condition"].tolist()
+            # the matrix is a table (docs/analysis.md): written with or without figures
+            m = significance_matrix(T["ratings_pairwise"], q, conds)
+            m.to_csv(out_dir / f"significance_{_safe(q)}.csv")
+            if opt.figures:
                 parts.append(add(report.fig_ratings(mu, q), f"ratings_{_safe(q)}", f"Ratings: {q}"))
-                conds = T["ratings"].loc[T["ratings"]["question"] == q].sort_values(
-                    "median", ascending=False)["condition"].tolist()
-                m = significance_matrix(T["ratings_pairwise"], q, conds)
-                m.to_csv(out_dir / f"significance_{_safe(q)}.csv")
                 parts.append(add(report.fig_significance(m, q), f"significance_{_safe(q)}",
                                  f"Significance matrix: {q}"))
         sections.append(("Ratings (0-100)", parts))
