@@ -8,13 +8,22 @@ browsers can seek. Only pages up to the participant's current page are served.
 """
 from __future__ import annotations
 
-from flask import Blueprint, Response, abort, request, send_from_directory
+import hashlib
+import hmac
+
+from flask import Blueprint, Response, abort, current_app, request, send_from_directory
 
 from study_app.context import get_store, get_study
 from study_app.pages import get_kind
 from study_app.participant import _own
 
 bp = Blueprint("media", __name__)
+
+
+def _opaque_etag(sid: str, index: int, slot: int) -> str:
+    """An ETag for range requests that says nothing about the file: a keyed hash of the page slot."""
+    key = current_app.config["SECRET_KEY"].encode()
+    return hmac.new(key, f"media|{sid}|{index}|{slot}".encode(), hashlib.sha256).hexdigest()[:32]
 
 
 @bp.route("/s/<sid>/media/<int:index>/<int:slot>")
@@ -37,6 +46,10 @@ def video(sid, index, slot):
     if media.file not in study.manifest.by_file():
         abort(404)
     resp = send_from_directory(study.manifest.root, media.file, mimetype=media.mimetype, conditional=True,
-                               max_age=0)
+                               max_age=0, etag=_opaque_etag(sid, index, slot))
+    # Blinding: nothing a participant receives may come from a stimulus file's name, time or render
+    # order, so no file name and no modification time (file sizes still differ; docs/study_app.md).
+    resp.headers.pop("Content-Disposition", None)
+    resp.headers.pop("Last-Modified", None)
     resp.headers["Cache-Control"] = "private, no-store"
     return resp

@@ -120,3 +120,33 @@ def test_a_participant_id_alone_does_not_open_someone_elses_session(app):
     same = h.Participant(app.test_client(), "5f3a1c9e8b7d6a5f4e3d2c10")
     assert same.enter().status_code == 302
     assert same.sid == victim.sid
+
+
+def test_media_responses_carry_nothing_derived_from_the_stimulus_file(app):
+    """No file name (Content-Disposition), no modification time (Last-Modified, or an ETag made of mtime and
+    size): sorting clips by such headers gave the render order, i.e. the condition. Ranges still work."""
+    rng = __import__("numpy").random.default_rng(5)
+    study = app.extensions["evalsuite_study"]
+    by_file = study.manifest.by_file()
+    p = _entered(app, "5f3a1c9e8b7d6a5f4e3d2c12")
+    checked = 0
+    while True:
+        _, data, csrf = p.page()
+        if data is None:
+            break
+        spec = h.plan_pages(app, p.sid)[data["index"]]
+        for url in data["videos"]:
+            r = p.client.get(url)
+            assert r.status_code == 200
+            assert "Content-Disposition" not in r.headers
+            assert "Last-Modified" not in r.headers
+            etag = r.headers.get("ETag", "")
+            assert all(name not in etag and name not in str(r.headers) for name in by_file)
+            assert "-" not in etag.strip('"')          # werkzeug's file ETag is "mtime-size-hash"
+            part = p.client.get(url, headers={"Range": "bytes=0-9"})
+            assert part.status_code == 206
+            assert len(part.data) == 10
+            checked += 1
+        if p.submit(data, csrf, h.make_answer(study, spec, rng)).status_code != 200:
+            break
+    assert checked >= 5
