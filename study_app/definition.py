@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
+import math
 import pathlib
 import re
 
@@ -26,10 +27,81 @@ from study_app.schema import Checker, describe
 
 __all__ = ["load_study", "load_manifest", "Study", "Manifest", "Stimulus", "Page", "PAIRWISE_ANSWERS"]
 
+MAX_NESTING = 50        # definitions are a few levels deep; far deeper input is not a definition
+MAX_ALIASES = 50        # YAML aliases per file (a "billion laughs" file has 81; definitions need few)
+
+
+class _BoundedYamlLoader(yaml.SafeLoader):
+    """PyYAML's safe loader that refuses to resolve more than :data:`MAX_ALIASES` aliases."""
+
+    aliases = 0
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            self.aliases += 1
+            if self.aliases > MAX_ALIASES:
+                raise yaml.YAMLError(f"more than {MAX_ALIASES} aliases; a study definition needs few")
+        return super().compose_node(parent, index)
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a number a study definition can use")
+
+
+def _parse(path: pathlib.Path, text: str) -> object:
+    """JSON or YAML, with errors that name the file and line; bounded nesting and aliases; no NaN."""
+    try:
+        if path.suffix.lower() == ".json":
+            data = json.loads(text, parse_constant=_no_constant)
+        else:
+            data = yaml.load(text, Loader=_BoundedYamlLoader)  # a SafeLoader subclass
+    except RecursionError:
+        raise StudyDefinitionError(f"nested too deeply (at most {MAX_NESTING} levels)", path=path) from None
+    except json.JSONDecodeError as exc:
+        raise StudyDefinitionError(f"invalid JSON: {exc.msg}", path=path, line=exc.lineno) from None
+    except ValueError as exc:
+        raise StudyDefinitionError(f"invalid JSON: {exc}", path=path) from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise StudyDefinitionError(f"invalid YAML: {getattr(exc, 'problem', None) or exc}", path=path,
+                                   line=mark.line + 1 if mark else None) from None
+    _check_values(path, data)
+    return data
+
+
+def _check_values(path: pathlib.Path, data: object) -> None:
+    """Bounded depth and finite numbers everywhere (YAML's .nan / .inf are numbers to it)."""
+    stack: list[tuple[object, str, int]] = [(data, "", 1)]
+    seen: set[int] = set()   # YAML aliases share objects: visit each once (no "billion laughs" walk)
+    while stack:
+        item, where, depth = stack.pop()
+        if isinstance(item, (dict, list)):
+            if id(item) in seen:
+                continue
+            seen.add(id(item))
+        if depth > MAX_NESTING:
+            raise StudyDefinitionError(f"nested too deeply (at most {MAX_NESTING} levels)", path=path,
+                                       field=where or None)
+        if isinstance(item, float) and not math.isfinite(item):
+            raise StudyDefinitionError(f"expected a finite number, got {item}", path=path, field=where or None)
+        if isinstance(item, dict):
+            stack.extend((v, f"{where}.{k}" if where else str(k), depth + 1) for k, v in item.items())
+        elif isinstance(item, list):
+            stack.extend((v, f"{where}[{i}]", depth + 1) for i, v in enumerate(item))
+
+
 def _read_text(path: pathlib.Path, missing: str, encoding: str) -> tuple[bytes, str]:
     """A definition file's bytes (for its hash) and text, or a StudyDefinitionError saying it is
     missing or not UTF-8."""
-    if not path.is_file():
+    name = str(path)
+    if "\x00" in name or any(len(part) > 255 for part in path.parts):
+        raise StudyDefinitionError("not a usable file name (a NUL byte, or a part longer than 255 characters)",
+                                   path=repr(name)[:200])
+    try:
+        exists = path.is_file()
+    except (ValueError, OSError) as exc:
+        raise StudyDefinitionError(f"not a usable file name ({exc})", path=repr(name)[:200]) from None
+    if not exists:
         raise StudyDefinitionError(missing, path=path)
     raw = path.read_bytes()
     try:
@@ -104,6 +176,9 @@ def load_manifest(path) -> Manifest:
 
 def _check_file_name(file: str, root: pathlib.Path, path, lineno):
     p = pathlib.PurePosixPath(file)
+    if "\x00" in file or len(file) > 255 or any(len(part) > 255 for part in p.parts):
+        raise StudyDefinitionError(f"{file[:60]!r}{'...' if len(file) > 60 else ''} is not a usable file name "
+                                   "(a NUL byte, or longer than 255 characters)", path=path, line=lineno, field="file")
     if p.is_absolute() or "\\" in file or any(part in ("..", "") for part in p.parts) or ":" in file:
         raise StudyDefinitionError(f"{file!r} is not a relative path inside the manifest's folder",
                                    path=path, line=lineno, field="file")
@@ -132,14 +207,7 @@ def load_study(path) -> Study:
     """Load and validate a study definition (``.yaml``, ``.yml`` or ``.json``)."""
     path = pathlib.Path(path)
     raw, text = _read_text(path, "study definition not found; expected a YAML or JSON file", "utf-8")
-    try:
-        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-    except json.JSONDecodeError as exc:
-        raise StudyDefinitionError(f"invalid JSON: {exc.msg}", path=path, line=exc.lineno) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise StudyDefinitionError(f"invalid YAML: {getattr(exc, 'problem', exc)}", path=path,
-                                   line=mark.line + 1 if mark else None) from None
+    data = _parse(path, text)
     chk = Checker(path)
     if not isinstance(data, dict):
         chk.fail("", f"expected a mapping at the top level, got {describe(data)}")

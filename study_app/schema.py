@@ -64,6 +64,9 @@ class Checker:
         return value
 
     def unknown_keys(self, obj: dict, allowed, where: str):
+        odd = [k for k in obj if not isinstance(k, str)]
+        if odd:
+            self.fail(f"{where}" if where else "", f"expected field names as text, found {describe(odd[0])}")
         extra = sorted(set(obj) - set(allowed))
         if extra:
             self.fail(f"{where}.{extra[0]}" if where else extra[0],

@@ -150,3 +150,43 @@ def test_media_responses_carry_nothing_derived_from_the_stimulus_file(app):
         if p.submit(data, csrf, h.make_answer(study, spec, rng)).status_code != 200:
             break
     assert checked >= 5
+
+
+@pytest.mark.parametrize("kind", ["deep-yaml", "deep-json", "laughs", "nan-yaml", "nan-json", "mixed-keys",
+                                  "nul-stimuli", "long-stimuli"])
+def test_hostile_definitions_give_one_precise_error(tmp_path, kind):
+    from study_app.definition import load_study
+    from study_app.errors import StudyDefinitionError
+
+    base = h.STUDY_YAML.format(sessions=2)
+    name, text = "s.yaml", base
+    if kind == "deep-yaml":
+        text = base + "extra: " + "[" * 3000 + "]" * 3000 + "\n"
+    elif kind == "deep-json":
+        name, text = "s.json", '{"id": "x", "pages": ' + "[" * 3000 + "]" * 3000 + "}"
+    elif kind == "laughs":
+        lol = ["a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]"]
+        for i in range(1, 9):
+            prev = chr(ord("a") + i - 1)
+            lol.append(f"{chr(ord('a') + i)}: &{chr(ord('a') + i)} [" + ", ".join([f"*{prev}"] * 9) + "]")
+        text = "\n".join(lol) + "\n" + base
+    elif kind == "nan-yaml":
+        text = base.replace("reservation_minutes: 100", "reservation_minutes: .nan")
+    elif kind == "nan-json":
+        name, text = "s.json", '{"id": "x", "reservation_minutes": NaN, "stimuli": "m.csv", "pages": []}'
+    elif kind == "mixed-keys":
+        text = base + "1: one\n"
+    elif kind == "nul-stimuli":
+        text = base.replace("stimuli: stim/manifest.csv", 'stimuli: "stim/\\0manifest.csv"')
+    elif kind == "long-stimuli":
+        text = base.replace("stimuli: stim/manifest.csv", "stimuli: " + "x" * 5000 + ".csv")
+    (tmp_path / name).write_text(text)
+    start = __import__("time").perf_counter()
+    with pytest.raises(StudyDefinitionError) as err:
+        load_study(tmp_path / name)
+    assert __import__("time").perf_counter() - start < 5
+    message = str(err.value)
+    expected = {"deep-yaml": "nested too deeply", "deep-json": "nested too deeply", "laughs": "aliases",
+                "nan-yaml": "finite number", "nan-json": "NaN", "mixed-keys": "field names as text",
+                "nul-stimuli": "not a usable file name", "long-stimuli": "not a usable file name"}[kind]
+    assert expected in message
