@@ -24,6 +24,9 @@ COMMANDS = {
     "render": "renderers.cli:render",
     "study": "study_app.cli:study",
     "analyze": "evalsuite.analysis.cli:analyze",
+    "generators": "evalsuite.generators.cli:generators",
+    "generate": "evalsuite.generators.cli:generate_command",
+    "train": "evalsuite.generators.cli:train_command",
 }
 
 

@@ -1,0 +1,127 @@
+"""Finding generators: the built-in table, installed plug-ins, and ad-hoc ``module:Class`` / ``file.py:Class``.
+
+* **Built-in**: :data:`BUILTIN` maps a name to ``"module:Class"``; the modules are cheap to import (no torch
+  at import time), so listing them reads their specs.
+* **Installed plug-ins**: packages declare an entry point in the group ``evalsuite.generators``
+  (``name = "package.module:Class"``). Listing shows them *without importing them* (name, distribution,
+  target); ``info`` and ``generate`` import the one asked for.
+* **Ad-hoc**: ``-g package.module:Class`` or ``-g path/to/file.py:Class``.
+"""
+from __future__ import annotations
+
+import importlib
+import importlib.metadata
+import importlib.util
+import pathlib
+import sys
+from dataclasses import dataclass
+
+from evalsuite.generators.contract import Generator, GeneratorError, GeneratorSpec
+
+__all__ = ["BUILTIN", "ENTRY_POINT_GROUP", "GeneratorEntry", "list_generators", "find_generator",
+           "generator_class"]
+
+ENTRY_POINT_GROUP = "evalsuite.generators"
+
+BUILTIN: dict[str, str] = {
+    # conditions (operators over the corpus's motion or any other condition)
+    "natural": "evalsuite.generators.conditions.basic:Natural",
+    "mean_pose": "evalsuite.generators.conditions.basic:MeanPose",
+    "precomputed": "evalsuite.generators.conditions.basic:Precomputed",
+    "mismatched": "evalsuite.generators.conditions.mismatched:Mismatched",
+    "random_segments": "evalsuite.generators.conditions.random_segments:RandomSegments",
+    "gaussian_noise": "evalsuite.generators.conditions.degradations:GaussianNoise",
+    "attenuated": "evalsuite.generators.conditions.degradations:Attenuated",
+    "fluctuation": "evalsuite.generators.conditions.degradations:Fluctuation",
+    "fixing": "evalsuite.generators.conditions.degradations:Fixing",
+    "smoothed": "evalsuite.generators.conditions.degradations:Smoothed",
+    # adapters
+    "external": "evalsuite.generators.bridge:ExternalCommand",
+}
+
+
+@dataclass(frozen=True)
+class GeneratorEntry:
+    """A generator as listed: ``origin`` is ``"builtin"``, ``"entry point"`` or ``"ad hoc"``; ``spec`` is None
+    for an installed plug-in that has not been imported."""
+
+    name: str
+    target: str
+    origin: str
+    distribution: str | None = None
+    spec: GeneratorSpec | None = None
+
+
+def _entry_points() -> dict[str, importlib.metadata.EntryPoint]:
+    return {ep.name: ep for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)}
+
+
+def list_generators() -> list[GeneratorEntry]:
+    """Built-ins (with their specs) and installed plug-ins (not imported), sorted by name."""
+    out = [GeneratorEntry(name, target, "builtin", None, generator_class(target).spec)
+           for name, target in BUILTIN.items()]
+    for name, ep in _entry_points().items():
+        if name in BUILTIN:
+            continue  # a built-in name cannot be taken over by an installed package
+        dist = f"{ep.dist.name} {ep.dist.version}" if ep.dist is not None else None
+        out.append(GeneratorEntry(name, ep.value, "entry point", dist, None))
+    return sorted(out, key=lambda e: e.name)
+
+
+def _load_file_class(path: pathlib.Path, cls_name: str) -> type:
+    if not path.is_file():
+        raise GeneratorError(f"no such plug-in file {path}", field="generator")
+    mod_name = f"evalsuite_plugin_{abs(hash(str(path.resolve())))}"
+    spec = importlib.util.spec_from_file_location(mod_name, path)
+    if spec is None or spec.loader is None:
+        raise GeneratorError(f"cannot import {path} as a Python module", field="generator")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[mod_name] = module  # so that worker processes can unpickle its requests by module name
+    spec.loader.exec_module(module)
+    try:
+        return getattr(module, cls_name)  # type: ignore[no-any-return]
+    except AttributeError:
+        raise GeneratorError(f"{path} defines no {cls_name!r}", field="generator") from None
+
+
+def generator_class(target: str) -> type[Generator]:
+    """The class named by ``"module:Class"`` or ``"file.py:Class"``, checked to be a :class:`Generator`."""
+    module_name, sep, cls_name = target.rpartition(":")
+    if not sep or not module_name or not cls_name:
+        raise GeneratorError(f"{target!r} is not a generator name, 'module:Class' or 'file.py:Class'",
+                             field="generator")
+    if module_name.endswith(".py") or "/" in module_name or "\\" in module_name:
+        cls = _load_file_class(pathlib.Path(module_name), cls_name)
+    else:
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            raise GeneratorError(f"cannot import {module_name!r} for generator {target!r}: {exc}",
+                                 field="generator") from None
+        cls = getattr(module, cls_name, None)
+        if cls is None:
+            raise GeneratorError(f"module {module_name!r} has no {cls_name!r}", field="generator")
+    if not (isinstance(cls, type) and issubclass(cls, Generator)):
+        raise GeneratorError(f"{target!r} is not a subclass of evalsuite.generators.Generator", field="generator")
+    if not isinstance(getattr(cls, "spec", None), GeneratorSpec):
+        raise GeneratorError(f"{target!r} has no GeneratorSpec in its 'spec' attribute", field="generator")
+    return cls
+
+
+def find_generator(name: str) -> GeneratorEntry:
+    """A generator by built-in name, installed plug-in name, or ``module:Class`` / ``file.py:Class``."""
+    if name in BUILTIN:
+        cls = generator_class(BUILTIN[name])
+        return GeneratorEntry(name, BUILTIN[name], "builtin", None, cls.spec)
+    eps = _entry_points()
+    if name in eps:
+        ep = eps[name]
+        cls = generator_class(ep.value)
+        dist = f"{ep.dist.name} {ep.dist.version}" if ep.dist is not None else None
+        return GeneratorEntry(name, ep.value, "entry point", dist, cls.spec)
+    if ":" in name:
+        cls = generator_class(name)
+        return GeneratorEntry(cls.spec.name, name, "ad hoc", None, cls.spec)
+    known = ", ".join(sorted(set(BUILTIN) | set(eps)))
+    raise GeneratorError(f"unknown generator {name!r}; known: {known} (or give 'module:Class' / 'file.py:Class')",
+                         field="generator")
