@@ -126,5 +126,5 @@ class ExternalCommand(Generator):
             fps = result.get("fps")
             motion = load_motion(path, fps=float(fps) if fps is not None and path.suffix != ".bvh" else None,
                                  joint_names=result.get("joint_names"))
-            meta = result.get("meta") if isinstance(result.get("meta"), dict) else {}
+            meta: dict[str, Any] = result["meta"] if isinstance(result.get("meta"), dict) else {}
             return GenerationResult(motion, {"bridge": self._argv(out_dir / "request.json", out_dir)[0], **meta})

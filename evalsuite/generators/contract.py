@@ -40,8 +40,9 @@ class GeneratorSpec:
     ``audio``/``transcript``: ``"required" | "optional" | "none"``; ``word_timings``: ``"required"``,
     ``"estimated"`` (plain text is enough: timings are estimated) or ``"none"``. ``native_fps``: the rate
     the generator produces (``None``: whatever the request asks). ``output``: ``"bvh"`` (joint rotations on
-    a skeleton), ``"positions"`` (joint positions) or ``"any"`` (operators: whatever their source is). ``joints``: the joint names it outputs (empty: not
-    declared; the runner then only checks that names are unique and non-empty). ``units``: the units of
+    a skeleton), ``"positions"`` (joint positions) or ``"any"`` (operators: whatever their source is).
+    ``joints``: the joint names it outputs (empty: not declared; the runner then only checks that names are
+    unique and non-empty). ``units``: the units of
     positions and offsets. ``deviations``: how a re-implementation departs from its paper.
     """
 
@@ -184,7 +185,7 @@ class Generator(abc.ABC):
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
         raise GeneratorError(f"{self.spec.name} is not trainable")
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027 - optional hook, empty by default
         """Release resources (subprocesses, files)."""
 
     # -- helpers for subclasses ----------------------------------------------------------------------

@@ -79,7 +79,8 @@ def _load_file_class(path: pathlib.Path, cls_name: str) -> type:
     sys.modules[mod_name] = module  # so that worker processes can unpickle its requests by module name
     spec.loader.exec_module(module)
     try:
-        return getattr(module, cls_name)  # type: ignore[no-any-return]
+        found: type = getattr(module, cls_name)
+        return found
     except AttributeError:
         raise GeneratorError(f"{path} defines no {cls_name!r}", field="generator") from None
 
@@ -98,9 +99,10 @@ def generator_class(target: str) -> type[Generator]:
         except ModuleNotFoundError as exc:
             raise GeneratorError(f"cannot import {module_name!r} for generator {target!r}: {exc}",
                                  field="generator") from None
-        cls = getattr(module, cls_name, None)
-        if cls is None:
+        attr = getattr(module, cls_name, None)
+        if attr is None:
             raise GeneratorError(f"module {module_name!r} has no {cls_name!r}", field="generator")
+        cls = attr
     if not (isinstance(cls, type) and issubclass(cls, Generator)):
         raise GeneratorError(f"{target!r} is not a subclass of evalsuite.generators.Generator", field="generator")
     if not isinstance(getattr(cls, "spec", None), GeneratorSpec):

@@ -59,7 +59,7 @@ def blend_values(motion: Motion, a: np.ndarray, b: np.ndarray, w: np.ndarray) ->
     spherical linear interpolation (slerp) per joint rotation, linear for position channels."""
     joints = rotation_joints(motion)
     w = np.clip(np.asarray(w, dtype=np.float64), 0.0, 1.0)
-    out = a * (1 - w)[:, None] + b * w[:, None]
+    out: np.ndarray = a * (1 - w)[:, None] + b * w[:, None]
     for _, cols, axes in joints:
         ra = Rotation.from_euler(axes.upper(), a[:, cols], degrees=True)
         rb = Rotation.from_euler(axes.upper(), b[:, cols], degrees=True)
