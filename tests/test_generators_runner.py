@@ -141,7 +141,7 @@ def test_same_seed_same_files_and_samples_named_and_seeded(requests, tmp_path):
 def test_deterministic_generators_refuse_samples(requests, tmp_path):
     from evalsuite.generators import find_generator
 
-    with pytest.raises(InputError, match="natural is deterministic: --samples 2"):
+    with pytest.raises(InputError, match="natural is deterministic as configured: --samples 2"):
         generate(find_generator("natural"), requests, tmp_path, samples=2, progress=False)
 
 

@@ -188,6 +188,12 @@ class Generator(abc.ABC):
     def close(self) -> None:  # noqa: B027 - optional hook, empty by default
         """Release resources (subprocesses, files)."""
 
+    @property
+    def stochastic(self) -> bool:
+        """Whether samples differ with the seed, as configured (the spec's value unless an option changes it,
+        e.g. dropout left on at inference)."""
+        return self.spec.stochastic
+
     # -- helpers for subclasses ----------------------------------------------------------------------
     def option(self, name: str, default: Any = None) -> Any:
         return self.config.get(name, default)

@@ -35,6 +35,8 @@ BUILTIN: dict[str, str] = {
     "fluctuation": "evalsuite.generators.conditions.degradations:Fluctuation",
     "fixing": "evalsuite.generators.conditions.degradations:Fixing",
     "smoothed": "evalsuite.generators.conditions.degradations:Smoothed",
+    # published models
+    "aud2repr2pose-demo": "evalsuite.generators.aud2repr2pose_demo.plugin:Aud2Repr2PoseDemoGenerator",
     # adapters
     "external": "evalsuite.generators.bridge:ExternalCommand",
 }

@@ -159,9 +159,6 @@ def generate(entry: GeneratorEntry, requests: Sequence[GenerationRequest], out_d
 
     assert entry.spec is not None
     spec, config = entry.spec, dict(config or {})
-    if samples > 1 and not spec.stochastic:
-        raise InputError(f"{spec.name} is deterministic: --samples {samples} would give {samples} identical copies",
-                         field="--samples")
     if not requests:
         raise InputError("nothing to generate: no segments", field="segments")
     fps_values = {r.fps for r in requests}
@@ -178,6 +175,9 @@ def generate(entry: GeneratorEntry, requests: Sequence[GenerationRequest], out_d
     task = _Task(entry.target, config, str(model_path) if model_path else None, str(out), samples, tuple(post))
     t0 = time.perf_counter()
     gen = _loaded(entry.target, config, task.model_dir)
+    if samples > 1 and not gen.stochastic:
+        raise InputError(f"{spec.name} is deterministic as configured: --samples {samples} would give {samples} "
+                         "identical copies", field="--samples")
     if type(gen).batch_only:
         rows = []
         for k in range(samples):
