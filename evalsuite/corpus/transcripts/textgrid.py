@@ -53,6 +53,13 @@ class _Reader:
                 self.toks.append(_Tok("str", m.group()[1:-1].replace('""', '"'), line))
             elif kind in ("num", "flag"):
                 self.toks.append(_Tok(kind, m.group(), line))
+            elif kind == "word":
+                # a label (xmin =, intervals: size, item [1]:, tiers? <exists>, File type =) is followed by
+                # a letter or one of = : [ < ; anything else is a value someone forgot to quote
+                rest = text[m.end():m.end() + 200].lstrip(" \t")
+                if not rest or not (rest[0].isalpha() or rest[0] in "=:[<"):
+                    raise InputError(f"found unquoted text {m.group()!r}; expected a quoted string or a number",
+                                     path=path, line=line)
         self.pos = 0
         self.last_line = len(newlines) + 1
 
