@@ -7,8 +7,14 @@ import numpy as np
 import pytest
 from corpus_helpers import wav
 
-from evalsuite.corpus.transcripts import (count_syllables, estimate_timings, read_transcript, textgrid_tiers,
-                                          voiced_span, write_transcript)
+from evalsuite.corpus.transcripts import (
+    count_syllables,
+    estimate_timings,
+    read_transcript,
+    textgrid_tiers,
+    voiced_span,
+    write_transcript,
+)
 from evalsuite.corpus.types import Transcript, Word
 from evalsuite.errors import InputError
 

@@ -8,7 +8,6 @@ import pathlib
 from typing import Any
 
 from evalsuite.corpus.readers.base import CorpusBuilder, register_layout
-from evalsuite.corpus.types import Stream
 from evalsuite.errors import InputError
 
 _SPLIT_DIRS = ("trn", "val", "tst")

@@ -7,6 +7,7 @@ import pathlib
 import struct
 import zipfile
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -94,10 +95,12 @@ def _bvh_info(path: pathlib.Path) -> MotionInfo:
     raise InputError("no 'Frames:' and 'Frame Time:' lines; expected a BVH file with a MOTION section", path=path)
 
 
-def _npy_shape(fh: object) -> tuple[int, ...]:
-    version = np.lib.format.read_magic(fh)  # type: ignore[arg-type]
-    shape, _, _ = np.lib.format._read_array_header(fh, version)  # type: ignore[attr-defined, arg-type]
-    return tuple(shape)
+def _npy_shape(fh: Any) -> tuple[int, ...]:
+    """The shape in a ``.npy`` header (public numpy readers; versions 1 and 2, version 3 is 2 in UTF-8)."""
+    major, _ = np.lib.format.read_magic(fh)
+    read = np.lib.format.read_array_header_1_0 if major == 1 else np.lib.format.read_array_header_2_0
+    shape, _, _ = read(fh)
+    return tuple(int(n) for n in shape)
 
 
 def motion_info(path: str | os.PathLike[str], fps: float | None = None) -> MotionInfo:

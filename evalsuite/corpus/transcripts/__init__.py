@@ -12,8 +12,13 @@ import pathlib
 from typing import Any
 
 from evalsuite.corpus.transcripts.google_json import read_google_json, write_google_json
-from evalsuite.corpus.transcripts.plaintext import (count_syllables, estimate_timings, read_plain_text, voiced_span,
-                                                    write_plain_text)
+from evalsuite.corpus.transcripts.plaintext import (
+    count_syllables,
+    estimate_timings,
+    read_plain_text,
+    voiced_span,
+    write_plain_text,
+)
 from evalsuite.corpus.transcripts.textgrid import read_textgrid, textgrid_tiers, write_textgrid
 from evalsuite.corpus.transcripts.tsv import read_tsv, write_tsv
 from evalsuite.corpus.types import Transcript
