@@ -124,7 +124,7 @@ def motion_info(path: str | os.PathLike[str], fps: float | None = None) -> Motio
                     return MotionInfo(fps, None, None)
                 with zf.open(key) as fh:
                     frames = _npy_shape(fh)[0]
-                if fps is None and "fps.npy" in names:
+                if "fps.npy" in names:  # the file's own rate wins over a default for files without one
                     with zf.open("fps.npy") as fh:
                         fps = float(np.lib.format.read_array(fh))
         elif suffix == ".csv":
