@@ -58,17 +58,17 @@ def genea2023(root: pathlib.Path, *, dyadic: bool = True, year: int = 2023) -> p
     meta_rows = {"trn": [("000", "01", "02"), ("001", "02", "01")], "val": [("000", "03", "01")],
                  "tst": [("000", "01", "03")]}
     for split, rows in meta_rows.items():
-        with open(_mk(root / split / "metadata.csv"), "w", newline="") as fh:
+        # 2023: metadata.csv with a header; 2022: trn_2022_v1_metadata.csv without (fname, fingers, speaker)
+        name = "metadata.csv" if dyadic else f"{split}_{year}_v1_metadata.csv"
+        with open(_mk(root / split / name), "w", newline="") as fh:
             w = csv.writer(fh)
             if dyadic:
                 w.writerow(["prefix", "main-agent_id", "main-agent_has_fingers", "interloctr_id",
                             "interloctr_has_fingers"])
-            else:
-                w.writerow(["fname", "userid", "fingers"])
             for sid, main, other in rows:
                 prefix = f"{split}_{year}_v0_{sid}"
                 w.writerow([prefix, main, "finger_incl", other, "finger_excl"] if dyadic
-                           else [prefix, main, "finger_incl"])
+                           else [prefix, "finger_incl" if main != "02" else "finger_excl", main])
                 for agent in agents:
                     base = root / split / agent if agent else root / split
                     stem = f"{prefix}_{agent}" if agent else prefix

@@ -56,6 +56,7 @@ def test_genea2022_is_the_monadic_layout_with_its_metadata(tmp_path):
     s = c.get("val_2022_v0_000")
     assert (s.split, s.speaker, s.interlocutor, s.meta["finger_incl"]) == ("val", "03", None, True)
     assert s.audio.name == "val_2022_v0_000.wav"
+    assert (c.get("trn_2022_v0_001").speaker, c.get("trn_2022_v0_001").meta["finger_incl"]) == ("02", False)
 
 
 def test_genea2023_empty_tsv_is_an_empty_transcript_as_in_the_real_data(tmp_path):

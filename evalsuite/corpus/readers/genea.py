@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import pathlib
+import re
 from typing import Any
 
 from evalsuite.corpus.readers.base import CorpusBuilder, register_layout
@@ -95,28 +96,40 @@ def _fingers(value: str | None) -> bool | None:
     return value.strip().lower() in ("finger_incl", "fingers_incl", "1", "true", "yes")
 
 
+_FINGERS = re.compile(r"^fingers?_(incl|excl)$", re.IGNORECASE)
+
+
+def _metadata_file(split_dir: pathlib.Path) -> pathlib.Path | None:
+    """``metadata.csv`` (GENEA 2023) or ``<split>_2022_v1_metadata.csv`` / ``<split>_metadata.csv`` (2022)."""
+    if (split_dir / "metadata.csv").is_file():
+        return split_dir / "metadata.csv"
+    found = sorted(p for p in split_dir.glob("*metadata.csv") if p.is_file())
+    return found[0] if found else None
+
+
 def _metadata(split_dir: pathlib.Path) -> dict[str, dict[str, Any]]:
-    """``metadata.csv`` by recording prefix: GENEA 2023 ``prefix, main-agent_id, main-agent_has_fingers,
-    interloctr_id, interloctr_has_fingers`` (header line); GENEA 2022 ``fname, userid, fingers`` (with or
-    without a header). Values ``finger_incl``/``fingers_incl`` (both spellings occur) -> True."""
-    path = split_dir / "metadata.csv"
-    if not path.is_file():
+    """The split's metadata by recording prefix.
+
+    GENEA 2023 ``metadata.csv`` has a header ``prefix, main-agent_id, main-agent_has_fingers, interloctr_id,
+    interloctr_has_fingers``; GENEA 2022 ``trn_2022_v1_metadata.csv`` has none and holds ``fname, finger flag,
+    speaker id`` (the flag column is recognised by its values). ``finger_incl`` and ``fingers_incl`` (both
+    spellings occur) mean True."""
+    path = _metadata_file(split_dir)
+    if path is None:
         return {}
     with open(path, newline="", encoding="utf-8-sig") as fh:
-        rows = list(csv.reader(fh))
+        rows = [r for r in csv.reader(fh)]
     if not rows:
         return {}
     header = [h.strip() for h in rows[0]]
     known = {"prefix", "fname", "main-agent_id", "userid", "speaker", "speaker_id"}
-    if not known & set(header):  # no header: positional (2022: fname, userid, fingers)
-        header = ["fname", "userid", "fingers", "interloctr_id", "interloctr_has_fingers"][: len(rows[0])]
-        body = rows
-        first_line = 1
-    else:
-        body = rows[1:]
-        first_line = 2
+    first_line = 2
+    if not known & set(header):  # no header: GENEA 2022's fname, finger flag, speaker id
+        flag = next((i for i, c in enumerate(rows[0]) if _FINGERS.match(c.strip())), None)
+        header = ["fname"] + ["fingers" if i == flag else "userid" for i in range(1, len(rows[0]))]
+        rows, first_line = [header] + rows, 1
     out: dict[str, dict[str, Any]] = {}
-    for n, row in enumerate(body, start=first_line):
+    for n, row in enumerate(rows[1:], start=first_line):
         if not any(c.strip() for c in row):
             continue
         if len(row) != len(header):
@@ -175,7 +188,8 @@ def _read_genea_split(split_dir: pathlib.Path, b: CorpusBuilder, dyadic: bool) -
 
 
 @register_layout("genea2022", detect=_detect_genea2022,
-                 description="GENEA 2022: trn|val|tst/{wav,bvh,tsv}/ and metadata.csv (speaker ids, finger flags)")
+                 description="GENEA 2022: trn|val|tst/{wav,bvh,tsv}/ and trn_2022_v1_metadata.csv "
+                             "(speaker ids, finger flags)")
 def read_genea2022(root: pathlib.Path, b: CorpusBuilder) -> None:
     for split_dir in _split_dirs(root):
         _read_genea_split(split_dir, b, dyadic=False)
