@@ -93,6 +93,8 @@ def beat(root: pathlib.Path, table: bool = True) -> pathlib.Path:
         wav(root / spk / f"{stem}.wav", 2.0)
         bvh(root / spk / f"{stem}.bvh", 2.0, fps=120)
         transcript(root / spk / f"{stem}.TextGrid")
+        (root / spk / f"{stem}.json").write_text('{"names": ["browDownLeft"], "frames": []}')  # facial, not words
+        (root / spk / f"{stem}.txt").write_text("semantic labels, not a transcript\n")
     if table:
         (root / "train_test_split.csv").write_text("id,type\n1_wayne_0_1_1,train\n1_wayne_0_2_2,val\n"
                                                    "2_scott_0_1_1,test\n")

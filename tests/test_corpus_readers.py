@@ -234,3 +234,21 @@ def test_positions_motion_durations_from_array_headers(tmp_path):
     with pytest.raises(InputError, match=r"motion b\.npy lasts 5\.000 s"):
         load_corpus(root, motion_fps=10)
     assert load_corpus(root).get("b").meta["motion_duration"] is None  # no rate: duration unknown
+
+
+def test_beat2_folders_with_smplx_npz_motion(tmp_path):
+    import numpy as np
+
+    root = tmp_path / "beat_english_v2.0.0"
+    for stem in ("2_scott_0_1_1", "4_lawrence_0_3_3"):
+        wav(root / "wave16k" / f"{stem}.wav", 2.0)
+        transcript(root / "textgrid" / f"{stem}.TextGrid")
+        (root / "smplxflame_30").mkdir(parents=True, exist_ok=True)
+        np.savez(root / "smplxflame_30" / f"{stem}.npz", poses=np.zeros((60, 165)), trans=np.zeros((60, 3)),
+                 mocap_frame_rate=np.array(30))
+    (root / "train_test_split.csv").write_text("id,type\n2_scott_0_1_1,train\n4_lawrence_0_3_3,test\n")
+    c = load_corpus(root)
+    assert c.layout == "beat" and {s.id: (s.speaker, s.split) for s in c} == {
+        "2_scott_0_1_1": ("2", "train"), "4_lawrence_0_3_3": ("4", "test")}
+    s = c.get("4_lawrence_0_3_3")
+    assert s.motion.parent.name == "smplxflame_30" and s.meta["motion_duration"] == pytest.approx(2.0)

@@ -119,13 +119,16 @@ def motion_info(path: str | os.PathLike[str], fps: float | None = None) -> Motio
         elif suffix == ".npz":
             with zipfile.ZipFile(path) as zf:
                 names = zf.namelist()
-                key = "positions.npy" if "positions.npy" in names else (names[0] if len(names) == 1 else None)
+                # evalsuite's positions/fps; BEAT2's SMPL-X poses/mocap_frame_rate; else a single array
+                key = next((k for k in ("positions.npy", "poses.npy") if k in names),
+                           names[0] if len(names) == 1 else None)
                 if key is None:
                     return MotionInfo(fps, None, None)
                 with zf.open(key) as fh:
                     frames = _npy_shape(fh)[0]
-                if "fps.npy" in names:  # the file's own rate wins over a default for files without one
-                    with zf.open("fps.npy") as fh:
+                rate_key = next((k for k in ("fps.npy", "mocap_frame_rate.npy") if k in names), None)
+                if rate_key is not None:  # the file's own rate wins over a default for files without one
+                    with zf.open(rate_key) as fh:
                         fps = float(np.lib.format.read_array(fh))
         elif suffix == ".csv":
             with open(path, "rb") as fh:

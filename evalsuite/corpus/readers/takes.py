@@ -21,16 +21,22 @@ def _files(root: pathlib.Path, recursive: bool) -> list[pathlib.Path]:
     return sorted(p for p in it if p.is_file() and not p.name.startswith("."))
 
 
-def _group(files: list[pathlib.Path], pattern: re.Pattern[str] | None) -> dict[str, dict[str, pathlib.Path]]:
-    """stem -> {"audio"|"motion"|"transcript": path}; two files of one kind for a stem is an error."""
+def _group(files: list[pathlib.Path], pattern: re.Pattern[str] | None, motion: tuple[str, ...] = _MOTION,
+           transcripts: tuple[str, ...] = TRANSCRIPT_SUFFIXES) -> dict[str, dict[str, pathlib.Path]]:
+    """stem -> {"audio"|"motion"|"transcript": path}; two files of one kind for a stem is an error, except that
+    a ``.bvh`` is preferred to other motion files (BEAT2 beside SMPL-X ``.npz``)."""
     out: dict[str, dict[str, pathlib.Path]] = {}
     for p in files:
         suffix = p.suffix.lower()
-        kind = "audio" if suffix == ".wav" else "motion" if suffix in _MOTION else \
-            "transcript" if suffix in TRANSCRIPT_SUFFIXES else None
+        kind = "audio" if suffix == ".wav" else "motion" if suffix in motion else \
+            "transcript" if suffix in transcripts else None
         if kind is None or (pattern is not None and not pattern.match(p.stem)):
             continue
         entry = out.setdefault(p.stem, {})
+        if kind == "motion" and kind in entry and (suffix == ".bvh") != (entry[kind].suffix.lower() == ".bvh"):
+            if suffix == ".bvh":
+                entry[kind] = p
+            continue
         if kind in entry:
             raise InputError(f"two {kind} files for {p.stem!r}: {entry[kind]} and {p}; keep one", path=p.parent)
         entry[kind] = p
@@ -73,7 +79,9 @@ def read_beat(root: pathlib.Path, b: CorpusBuilder) -> None:
         next(iter(sorted(root.glob("*/train_test_split.csv"))), None)
     if table is not None:
         splits = _split_table(table, ("id", "name", "segment"), ("type", "split"))
-    for stem, files in sorted(_group(_files(root, True), _BEAT).items()):
+    # BEAT keeps other annotations beside each take under the same stem (.json facial blendshapes, .txt
+    # semantic labels, .csv emotions): only .TextGrid is the transcript, only .bvh/.npz the motion
+    for stem, files in sorted(_group(_files(root, True), _BEAT, (".bvh", ".npz"), (".textgrid",)).items()):
         m = _BEAT.match(stem)
         assert m is not None
         split = splits.get(stem, {}).get("split")
@@ -94,7 +102,7 @@ def _detect_zeggs(root: pathlib.Path) -> bool:
 @register_layout("zeggs", detect=_detect_zeggs,
                  description="ZEGGS: <index>_<style>_<...>.wav + .bvh per take (one speaker, no transcripts)")
 def read_zeggs(root: pathlib.Path, b: CorpusBuilder) -> None:
-    for stem, files in sorted(_group(_files(root, True), _ZEGGS).items()):
+    for stem, files in sorted(_group(_files(root, True), _ZEGGS, (".bvh",), ()).items()):
         m = _ZEGGS.match(stem)
         assert m is not None
         expected = files.get("audio") or (files.get("motion") or files["transcript"]).with_suffix(".wav")
