@@ -74,3 +74,21 @@ def test_help_everywhere_with_examples_and_errors_without_traceback(tmp_path):
     r = _run("info", tmp_path / "nowhere")
     assert r.exit_code == 1 and "nowhere: no such corpus folder" in r.output
     assert "corpus" in CliRunner().invoke(main, ["--help"]).output
+
+
+def test_a_subcommand_is_one_entry_in_the_lazy_table(monkeypatch):
+    from evalsuite.corpus import cli
+
+    monkeypatch.setitem(cli.SUBCOMMANDS, "hello", "evalsuite.corpus.cli:_hello_for_test")
+    monkeypatch.setitem(cli.SUBCOMMANDS, "absent", "evalsuite.corpus.no_such_module:cmd")
+    import click
+
+    @click.command()
+    def _hello_for_test():
+        """Say hello."""
+        click.echo("hello from the table")
+
+    monkeypatch.setattr(cli, "_hello_for_test", _hello_for_test, raising=False)
+    r = _run("--help")
+    assert "hello" in r.output and "absent" not in r.output
+    assert _run("hello").output == "hello from the table\n"

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import importlib.util
 import json
 import pathlib
 import warnings
@@ -25,13 +26,23 @@ from evalsuite.errors import InputError
 SUBCOMMANDS: dict[str, str] = {}
 
 
+def _exists(module: str) -> bool:
+    try:
+        return importlib.util.find_spec(module) is not None
+    except ImportError:
+        return False
+
+
 class _CorpusGroup(click.Group):
+    """Built-in subcommands plus the lazily imported :data:`SUBCOMMANDS` whose module is present."""
+
     def list_commands(self, ctx: click.Context) -> list[str]:
-        return sorted(set(super().list_commands(ctx)) | set(SUBCOMMANDS))
+        lazy = {n for n, target in SUBCOMMANDS.items() if _exists(target.split(":")[0])}
+        return sorted(set(super().list_commands(ctx)) | lazy)
 
     def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
         cmd = super().get_command(ctx, name)
-        if cmd is None and name in SUBCOMMANDS:
+        if cmd is None and name in SUBCOMMANDS and _exists(SUBCOMMANDS[name].split(":")[0]):
             module, attr = SUBCOMMANDS[name].split(":")
             cmd = getattr(importlib.import_module(module), attr)
         return cmd
