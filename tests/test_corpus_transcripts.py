@@ -159,14 +159,14 @@ def test_plain_text_finds_the_audio_beside_it_or_says_it_needs_one(tmp_path):
      r"time order without overlap"),
     ("fields.tsv", "0.0\t0.5\n", r"fields\.tsv:1: expected 3 tab-separated fields \(start, end, word\), found 2"),
     ("bad_time.json", '[{"alternatives": [{"words": [{"start_time": "0.4", "end_time": "1s", "word": "a"}]}]}]',
-     r"bad_time\.json: results\[0\]\.alternatives\[0\]\.words\[0\]\.start_time: expected a duration string such as "
+     r"bad_time\.json:1: results\[0\]\.alternatives\[0\]\.words\[0\]\.start_time: expected a duration string such as "
      r"\"0\.400s\""),
     ("missing.json", '[{"alternatives": [{"words": [{"start_time": "0.4s", "word": "a"}]}]}]',
-     r"missing\.json: results\[0\]\.alternatives\[0\]\.words\[0\]: missing 'end_time'"),
+     r"missing\.json:1: results\[0\]\.alternatives\[0\]\.words\[0\]: missing 'end_time'"),
     ("syntax.json", '[{"alternatives": [\n  {"words": ]}]', r"syntax\.json:2: column 13: not valid JSON \(Expecting value\); expected Google speech-to-text JSON"),
     ("overlap.json", '[{"alternatives": [{"words": [{"start_time": "0s", "end_time": "1s", "word": "a"},'
                      '{"start_time": "0.5s", "end_time": "2s", "word": "b"}]}]}]',
-     r"overlap\.json: results\[0\]\.alternatives\[0\]\.words\[1\]: word 'b' starts at 0\.5 s, before 'a'"),
+     r"overlap\.json:1: results\[0\]\.alternatives\[0\]\.words\[1\]: word 'b' starts at 0\.5 s, before 'a'"),
     ("empty.json", "  \n", r"empty\.json: the file is empty; expected a Google speech-to-text JSON file"),
     ("bad.TextGrid", SHORT_TEXTGRID.replace('"deep"', "deep"),
      r"bad\.TextGrid:26: found unquoted text 'deep'; expected a quoted string or a number"),
@@ -208,3 +208,12 @@ def _write(path, text):
 def _read(path):
     from evalsuite.audio import read_wav
     return read_wav(path)
+
+
+def test_json_errors_name_the_line_of_the_word(tmp_path):
+    data = [{"alternatives": [{"words": [{"start_time": "0s", "end_time": "1s", "word": "a"},
+                                         {"start_time": "1s", "end_time": "1.5", "word": "b"}]}]}]
+    path = _write(tmp_path / "pretty.json", json.dumps(data, indent=2))
+    with pytest.raises(InputError, match=r"pretty\.json:11: results\[0\]\.alternatives\[0\]\.words\[1\]\.end_time: "
+                                         r"expected a duration string such as \"0\.400s\" or \"6s\", found '1\.5'"):
+        read_transcript(path)

@@ -10,6 +10,8 @@ a list of results with ``start_time``/``end_time`` strings (at most 6 decimals).
 from __future__ import annotations
 
 import json
+import json.decoder
+import json.scanner
 import os
 import re
 from typing import Any
@@ -55,8 +57,59 @@ def _pick(word: dict[str, Any], keys: tuple[str, ...], path: str | os.PathLike[s
                      "to have a start and an end time", path=path, field=where)
 
 
+class _Located(dict):
+    """A JSON object that knows the line it starts on."""
+
+    line = 0
+
+
+def _line_of(text: str, field: str) -> int | None:
+    """The line of the JSON object a field path (``results[0].alternatives[0].words[3].start_time``) names,
+    found by parsing again with the standard library's pure-Python scanner, which reports where each object
+    starts. Only used to place an error message; None when anything about it fails."""
+    decoder: Any = json.JSONDecoder()
+    json_object: Any = getattr(json.decoder, "JSONObject", None)
+    make_scanner: Any = getattr(json.scanner, "py_make_scanner", None)
+    if json_object is None or make_scanner is None:
+        return None
+
+    def parse_object(s_and_end: tuple[str, int], strict: bool, scan_once: Any, hook: Any, pairs_hook: Any,
+                     memo: Any = None) -> tuple[Any, int]:
+        obj, end = json_object(s_and_end, strict, scan_once, None, _Located, memo)
+        obj.line = text.count("\n", 0, s_and_end[1]) + 1
+        return obj, end
+
+    decoder.parse_object = parse_object
+    decoder.scan_once = make_scanner(decoder)
+    try:
+        node: Any = decoder.decode(text)
+    except (ValueError, TypeError, RecursionError):
+        return None
+    line = None
+    for part in re.findall(r"[A-Za-z_]+|\[\d+\]", field):
+        if part == "results" and isinstance(node, list):
+            continue
+        if part.startswith("[") and isinstance(node, list) and int(part[1:-1]) < len(node):
+            node = node[int(part[1:-1])]
+        elif isinstance(node, dict) and part in node:
+            node = node[part]
+        else:
+            break
+        line = node.line if isinstance(node, _Located) else line
+    return line
+
+
 def read_google_json(path: str | os.PathLike[str], *, allow_empty: bool = False) -> Transcript:
     text = read_text(path, what="Google speech-to-text JSON", allow_empty=allow_empty)
+    try:
+        return _read(text, path, allow_empty)
+    except InputError as exc:
+        if exc.field is None or exc.line is not None:
+            raise
+        raise InputError(exc.reason, path=path, line=_line_of(text, exc.field), field=exc.field) from None
+
+
+def _read(text: str, path: str | os.PathLike[str], allow_empty: bool) -> Transcript:
     if not text.strip():
         return Transcript((), source=os.fspath(path))
     try:
