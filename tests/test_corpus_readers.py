@@ -252,3 +252,14 @@ def test_beat2_folders_with_smplx_npz_motion(tmp_path):
         "2_scott_0_1_1": ("2", "train"), "4_lawrence_0_3_3": ("4", "test")}
     s = c.get("4_lawrence_0_3_3")
     assert s.motion.parent.name == "smplxflame_30" and s.meta["motion_duration"] == pytest.approx(2.0)
+
+
+def test_the_interlocutor_streams_durations_are_checked_too(tmp_path):
+    root = genea2023(tmp_path / "g23")
+    bvh(root / "val" / "interloctr" / "bvh" / "val_2023_v0_000_interloctr.bvh", 6.0)
+    with pytest.raises(InputError, match=r"segment 'val_2023_v0_000 \(interlocutor\)': audio "
+                                         r"val/interloctr/wav/val_2023_v0_000_interloctr\.wav lasts 3\.000 s but motion "
+                                         r"val/interloctr/bvh/val_2023_v0_000_interloctr\.bvh lasts 6\.000 s"):
+        load_corpus(root)
+    c = load_corpus(root, on_mismatch="skip")
+    assert "val_2023_v0_000" not in {s.id for s in c} and c.meta["skipped"] == ["val_2023_v0_000"]

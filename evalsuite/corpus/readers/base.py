@@ -128,12 +128,19 @@ class CorpusBuilder:
             meta.update(audio_rate=a_info.rate, audio_channels=a_info.channels, audio_duration=a_info.duration)
         if m_info is not None:
             meta.update(motion_fps=m_info.fps, motion_frames=m_info.frames, motion_duration=m_info.duration)
-        if a_info is not None and m_info is not None and m_info.duration is not None:
-            record = self._durations_agree(seg_id, audio, motion, a_info.duration, m_info.duration)
+        pairs = [(seg_id, audio, motion, a_info, m_info)]
+        if interlocutor is not None and interlocutor.audio is not None and interlocutor.motion is not None:
+            pairs.append((f"{seg_id} (interlocutor)", interlocutor.audio, interlocutor.motion,
+                          wav_info(interlocutor.audio), motion_info(interlocutor.motion, self.options.motion_fps)))
+        for name, a_path, m_path, a, m in pairs:
+            if a is None or m is None or m.duration is None:
+                continue
+            record = self._durations_agree(name, a_path, m_path, a.duration, m.duration)
             if record is not None and record["action"] == "skip":
+                self.meta["skipped"].append(seg_id)
                 return
             if record is not None:
-                meta["mismatch"] = record
+                meta.setdefault("mismatch", record)
         if missing:
             meta["missing"] = missing
             for name in missing:
@@ -164,8 +171,6 @@ class CorpusBuilder:
         self.meta["mismatches"].append(record)
         if opt.on_mismatch == "warn":
             warnings.warn(message, stacklevel=3)
-        else:
-            self.meta["skipped"].append(seg_id)
         return record
 
     def build(self, meta: dict[str, Any] | None = None) -> Corpus:
