@@ -27,6 +27,7 @@ COMMANDS = {
     "generators": "evalsuite.generators.cli:generators",
     "generate": "evalsuite.generators.cli:generate_command",
     "train": "evalsuite.generators.cli:train_command",
+    "corpus": "evalsuite.corpus.cli:corpus",
 }
 
 
