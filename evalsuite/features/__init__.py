@@ -11,7 +11,7 @@ Text features per frame (word ids, Gesticulator's timing features, word embeddin
 """
 from __future__ import annotations
 
-from evalsuite.features import demo_recipes, logmel, mfcc, prosody  # noqa: F401  (register the recipes)
+from evalsuite.features import demo_recipes, embeddings, logmel, mfcc, prosody, text  # noqa: F401  (registration)
 from evalsuite.features.base import Audio, Recipe, get_recipe, list_recipes, load_audio, register_recipe
 from evalsuite.features.pipeline import extract
 
