@@ -22,6 +22,7 @@ import hashlib
 import json
 import os
 import pathlib
+import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Union
@@ -102,7 +103,10 @@ def load_audio(audio: AudioInput | Audio) -> Audio:
             raise InputError(f"the sample rate must be a positive integer, got {rate!r}")
         return Audio(x, int(rate))
     path = pathlib.Path(os.fspath(audio))
-    samples, rate = read_wav(path, raw=True)
+    try:
+        samples, rate = read_wav(path, raw=True)
+    except (UnboundLocalError, IndexError, struct.error) as exc:   # scipy on some truncated headers
+        raise InputError(f"not a readable WAV file ({type(exc).__name__}: {exc})", path=path) from None
     return Audio(samples, rate, path)
 
 
