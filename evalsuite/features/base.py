@@ -36,7 +36,7 @@ from evalsuite.errors import InputError
 __all__ = ["Audio", "AudioInput", "Recipe", "register_recipe", "get_recipe", "list_recipes", "load_audio",
            "resample_frames", "fit_length"]
 
-AudioInput = Union[str, os.PathLike, tuple]
+AudioInput = Union[str, "os.PathLike[str]", tuple]  # noqa: UP007  (a runtime alias: Python 3.10 cannot | a string)
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ def _read_tsv(path: pathlib.Path) -> Transcript:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read the transcript ({exc})", path=path) from None
-    words = []
+    words: list[Word] = []
     for lineno, line in enumerate(text.splitlines(), start=1):
         if not line.strip():
             continue

@@ -42,7 +42,7 @@ _MIN_LOG_MEL = _MIN_LOG_HZ / _F_SP
 _LOGSTEP = np.log(6.4) / 27.0
 
 
-def hz_to_mel_slaney(f: np.ndarray) -> np.ndarray:
+def hz_to_mel_slaney(f: np.ndarray | float) -> np.ndarray:
     f = np.asarray(f, dtype=np.float64)
     lin = f / _F_SP
     with np.errstate(divide="ignore"):
@@ -50,7 +50,7 @@ def hz_to_mel_slaney(f: np.ndarray) -> np.ndarray:
     return np.where(f >= _MIN_LOG_HZ, log, lin)
 
 
-def mel_to_hz_slaney(m: np.ndarray) -> np.ndarray:
+def mel_to_hz_slaney(m: np.ndarray | float) -> np.ndarray:
     m = np.asarray(m, dtype=np.float64)
     return np.where(m >= _MIN_LOG_MEL, _MIN_LOG_HZ * np.exp(_LOGSTEP * (m - _MIN_LOG_MEL)), _F_SP * m)
 

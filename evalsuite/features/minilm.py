@@ -98,6 +98,7 @@ class BertEncoder:
         tok_cfg = self.folder / "tokenizer_config.json"
         self.lowercase = bool(json.loads(tok_cfg.read_text(encoding="utf-8")).get("do_lower_case", True)) \
             if tok_cfg.is_file() else True
+        self.tokenizer: Any
         if tok_json.is_file():
             self.tokenizer = Tokenizer.from_file(str(tok_json))
         elif vocab.is_file():

@@ -10,8 +10,15 @@ import numpy as np
 
 from evalsuite.corpus.types import Transcript
 from evalsuite.errors import InputError
-from evalsuite.features.base import Audio, AudioInput, check_transcript, fit_length, get_recipe, load_audio, \
-    resample_frames
+from evalsuite.features.base import (
+    Audio,
+    AudioInput,
+    check_transcript,
+    fit_length,
+    get_recipe,
+    load_audio,
+    resample_frames,
+)
 from evalsuite.features.cache import cache_key, cache_load, cache_store, default_cache_dir
 
 __all__ = ["extract"]

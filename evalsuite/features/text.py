@@ -12,7 +12,8 @@ word duration, progress, syllables per unit time; all five are 0 in silence (Ges
 ``silence_extra_features``). Two conventions:
 
 * ``"gesticulator"`` (default) -- as Gesticulator's ``parse_json_transcript`` computes them (Kucherenko et al.,
-  ICMI 2020, Table 1): word times truncated to whole deciseconds (``int(t * 10)``: 0.57 s -> 5, not rounded), features computed on a 10-fps grid **in deciseconds**: in decisecond frame ``k``
+  ICMI 2020, Table 1): word times truncated to whole deciseconds (``int(t * 10)``: 0.57 s -> 5, not
+  rounded), features computed on a 10-fps grid **in deciseconds**: in decisecond frame ``k``
   of a word ``[s, e)`` (``s <= k < e``), elapsed ``= k + 1 - s`` (counted from 1), remaining ``= e - k``
   (``elapsed + remaining = duration + 1``), duration ``= e - s``, progress ``= elapsed / duration`` (so 1.0 in
   the word's last frame), speed = syllables per **decisecond** (the paper's table says per second; the code
