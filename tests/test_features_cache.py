@@ -95,3 +95,13 @@ def test_default_folder(monkeypatch, tmp_path):
     assert default_cache_dir() == tmp_path / "evalsuite" / "features"
     monkeypatch.setenv("EVALSUITE_CACHE_DIR", str(tmp_path / "x"))
     assert default_cache_dir() == tmp_path / "x"
+
+
+def test_text_recipes_are_keyed_by_rate_and_frame_count(tmp_path):
+    t = Transcript((Word("a", 0.0, 1.0), Word("b", 2.0, 3.0)))
+    short = extract("text_timing", None, transcript=t, fps=10, n_frames=15, cache_dir=tmp_path)
+    full = extract("text_timing", None, transcript=t, fps=10, n_frames=30, cache_dir=tmp_path)
+    assert short.shape == (15, 5) and full.shape == (30, 5) and full[25, 2] == 10
+    np.testing.assert_array_equal(full[:15], short)
+    assert extract("text_timing", None, transcript=t, fps=20, n_frames=30, cache_dir=tmp_path)[25, 2] == 0
+    assert len(entries(tmp_path)) == 3

@@ -45,9 +45,10 @@ def transcript_digest(transcript: Transcript | None) -> str:
 
 
 def cache_key(audio_digest: str, recipe: str, version: int, params: str, transcript: Transcript | None,
-              fps: float | None = None) -> str:
+              fps: float | None = None, n_frames: int | None = None) -> str:
     payload = json.dumps({"audio": audio_digest, "recipe": recipe, "version": version, "params": params,
-                          "transcript": transcript_digest(transcript), "fps": fps}, sort_keys=True)
+                          "transcript": transcript_digest(transcript), "fps": fps, "n_frames": n_frames},
+                         sort_keys=True)
     return hashlib.sha256(payload.encode()).hexdigest()
 
 

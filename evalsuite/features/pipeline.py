@@ -66,7 +66,10 @@ def extract(name: str, audio: AudioInput | Audio | None, *, fps: float | None = 
     folder = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
     if cache:
         digest = loaded.digest() if loaded is not None else f"frames:{n_frames}"
-        key = cache_key(digest, recipe.name, recipe.version, recipe.key_params(params), transcript, compute_fps)
+        # recipes computed at the rate asked also compute exactly n_frames: both are part of the key
+        frames = n_frames if recipe.native_fps is None else None
+        key = cache_key(digest, recipe.name, recipe.version, recipe.key_params(params), transcript, compute_fps,
+                        frames)
         data = cache_load(folder, key)
     if data is None:
         opts = {**recipe.params, **params}
