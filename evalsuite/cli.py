@@ -28,6 +28,7 @@ COMMANDS = {
     "generate": "evalsuite.generators.cli:generate_command",
     "train": "evalsuite.generators.cli:train_command",
     "corpus": "evalsuite.corpus.cli:corpus",
+    "features": "evalsuite.features.cli:features",
 }
 
 
