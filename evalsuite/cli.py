@@ -24,6 +24,8 @@ COMMANDS = {
     "render": "renderers.cli:render",
     "study": "study_app.cli:study",
     "analyze": "evalsuite.analysis.cli:analyze",
+    # temporary: joins the `corpus` group (evalsuite/corpus/cli.py) as `evalsuite corpus synth`
+    "corpus-synth": "evalsuite.corpus.synth_cli:synth",
 }
 
 
