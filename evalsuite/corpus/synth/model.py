@@ -11,8 +11,8 @@ Given words with times and emphasis flags, a seed and :class:`MotionParams`, :fu
    unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head shake and
    uses no arm.
 2. **renders** the units as keyframe tracks of arm poses (body.POSES) with minimum-jerk transitions, adds
-   per-word *batons* (an elbow lift ``baton_deg`` x gain x ``sin^2`` over the word, lagged ``baton_lag_s``:
-   wrist speed follows speech), nods on emphasised words, head shakes, breathing and sway, and labels each
+   per-word *batons* (the hands circle at ``baton_hz`` with a radius of ``baton_deg`` x gain x ``sin^(1/2)``
+   over the word, lagged ``baton_lag_s``: wrist speed follows speech, with stops between words), nods on emphasised words, head shakes, breathing and sway, and labels each
    frame with the phase, gesture kind and keyword of the unit it belongs to.
 
 Every random number is drawn in a fixed order whatever the switches, so the switches change only what
@@ -20,6 +20,7 @@ they name: the same seed with ``offset_s=0.6`` is the same performance 0.6 s lat
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,7 @@ from evalsuite.corpus.synth.params import MotionParams
 from evalsuite.corpus.types import Transcript
 from evalsuite.motion.motion import Motion
 
-__all__ = ["Unit", "FrameLabels", "plan_gestures", "oracle_motion"]
+__all__ = ["Unit", "FrameLabels", "plan_gestures", "oracle_motion", "syllable_onsets"]
 
 _ARM_KINDS = {"beat": "beat", "up": "up", "wide": "wide", "self": "self", "point": "point"}
 _N_DRAWS = 9  # random numbers per word, always drawn
@@ -169,11 +170,24 @@ def _bump(t: np.ndarray, start: float, length: float) -> np.ndarray:
     return np.where((s > 0) & (s < 1), np.sin(np.pi * np.clip(s, 0, 1)) ** 2, 0.0)
 
 
+def syllable_onsets(transcript: Transcript) -> list[list[float]]:
+    """Estimated onsets (s after the word's start) of each word's syllables, for transcripts whose audio
+    onsets are unknown: ``k * d / n`` for ``k < n``, n = the number of vowel groups of the word."""
+    out = []
+    for w in transcript.words:
+        n = max(1, len(re.findall(r"[aeiouy]+", w.text.lower().rstrip("e")) or [w.text]))
+        out.append([round(k * w.duration / n, 4) for k in range(n)])
+    return out
+
+
 def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: list[bool] | None = None,
-                  params: MotionParams | None = None, name: str | None = None) -> tuple[Motion, FrameLabels]:
+                  params: MotionParams | None = None, name: str | None = None,
+                  onsets: list[list[float]] | None = None) -> tuple[Motion, FrameLabels]:
     """The speaker model's motion for ``transcript`` (``duration`` s at ``params.fps``) and its labels.
 
-    ``emphasis``: one flag per word (default: none emphasised). With a segment's own motion seed and
+    ``emphasis``: one flag per word (default: none emphasised). ``onsets``: per word, the times (s after
+    its start) of the acoustic onsets in it, where the baton's circling stops and restarts (default:
+    :func:`syllable_onsets`; a synthetic corpus stores the onsets of its speech). With a segment's own motion seed and
     emphasis (corpus.json) this reproduces the corpus's motion exactly; another seed gives another
     performance of the same speech.
     """
@@ -181,6 +195,9 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
     flags = list(emphasis) if emphasis is not None else [False] * len(transcript)
     if len(flags) != len(transcript):
         raise ValueError(f"emphasis has {len(flags)} flags for {len(transcript)} words")
+    syl = onsets if onsets is not None else syllable_onsets(transcript)
+    if len(syl) != len(transcript):
+        raise ValueError(f"onsets has {len(syl)} entries for {len(transcript)} words")
     rng = np.random.default_rng(seed)
     idle = rng.uniform(size=12)
     draws = rng.uniform(size=(len(transcript), _N_DRAWS))
@@ -194,20 +211,26 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
         vals = tr.sample(t)
         for c, (joint, ch) in enumerate(ARM_CHANNELS):
             values[:, channel_index(sk, side + joint, ch)] = vals[:, c]
-    # batons (every spoken word) and nods (emphasised words): speech drives the arms all the time
-    baton = np.zeros(n)
+    # batons: while a word is spoken the hands circle (elbow flexion and arm abduction in quadrature at
+    # baton_hz) with an amplitude that rises and falls over the word, so wrist speed follows the speech;
+    # nods on emphasised words
+    gate = np.zeros(n)
     nod = np.zeros(n)
     if p.beats:
         for i, (w, emph) in enumerate(zip(transcript.words, flags)):
-            gain = p.emphasis_gain if emph else 1.0
+            gain = (p.emphasis_gain if emph else 1.0) * (0.7 + 0.6 * draws[i, 8])
             start = w.start + p.offset_s + p.baton_lag_s
-            baton += p.baton_deg * gain * (0.7 + 0.6 * draws[i, 8]) * _bump(t, start, w.duration)
+            cuts = [0.0] + [o for o in syl[i] if p.min_syllable_s <= o <= w.duration - p.min_syllable_s]
+            cuts.append(w.duration)
+            for a, b in zip(cuts[:-1], cuts[1:]):
+                gate += gain * np.sqrt(_bump(t, start + a, b - a))
             if emph:
                 nod += p.nod_deg * _bump(t, start, 0.35)
-    baton *= p.amplitude
-    values[:, channel_index(sk, "RightForeArm", "Yrotation")] += baton
-    values[:, channel_index(sk, "LeftForeArm", "Yrotation")] -= 0.6 * baton
-    values[:, channel_index(sk, "RightHand", "Zrotation")] += 0.8 * baton
+    gate *= p.baton_deg * p.amplitude
+    phase = 2 * np.pi * p.baton_hz * t
+    for side, sign, shift in (("Right", 1.0, 0.0), ("Left", -1.0, 0.6 * np.pi)):
+        values[:, channel_index(sk, side + "ForeArm", "Yrotation")] += sign * gate * np.sin(phase + shift)
+        values[:, channel_index(sk, side + "Arm", "Zrotation")] += 0.5 * sign * gate * np.cos(phase + shift)
     values[:, channel_index(sk, "Neck", "Xrotation")] += p.amplitude * nod
     for unit in units:
         if unit.kind == "negation":

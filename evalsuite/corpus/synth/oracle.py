@@ -54,4 +54,5 @@ def segment_oracle(corpus: Corpus | str | pathlib.Path, segment_id: str, seed: i
     flags = [i in emphasised for i in range(len(transcript))]
     s = int(seg.meta["motion_seed"]) if seed is None else int(seed)
     duration = float(meta["segments"][segment_id]["n_frames"]) / p.fps
-    return oracle_motion(transcript, duration, s, flags, p, name=segment_id)
+    onsets = meta["segments"][segment_id].get("onsets")
+    return oracle_motion(transcript, duration, s, flags, p, name=segment_id, onsets=onsets)
