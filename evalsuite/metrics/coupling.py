@@ -13,6 +13,7 @@ units with +y up and +z forward (the BVH convention of GENEA and Trinity data).
 """
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -25,7 +26,7 @@ from evalsuite.metrics._validate import positions_array, positive
 
 __all__ = ["speech_energy", "joint_speed", "energy_speed_correlation", "lexical_contrast", "motion_feature",
            "lexical_contrasts", "word_onsets", "phase_statistics", "PhaseStatistics", "SYNTH_CLASSES",
-           "LEXICAL_FEATURES", "LexicalClass"]
+           "LEXICAL_FEATURES", "LexicalClass", "wrist_indices", "read_phase_labels"]
 
 WRISTS = (("RightHand", "LeftHand"), ("b_r_wrist", "b_l_wrist"), ("RightWrist", "LeftWrist"))
 CHEST = ("Spine3", "b_spine3", "Spine2", "b_spine2", "Chest", "Spine1")
@@ -88,7 +89,7 @@ def energy_speed_correlation(energy: npt.ArrayLike, speed: npt.ArrayLike, fps: f
         raise InputError(f"need at least {2 * lag_max + 3} frames for lags of +-{max_lag_s:g} s, got {n}",
                          field="speed")
     e, s = e[:n], s[:n]
-    lags = np.arange(-lag_max, lag_max + 1)
+    lags = list(range(-lag_max, lag_max + 1))
     r = np.array([_pearson(e[max(0, -k): n - max(0, k)], s[max(0, k): n - max(0, -k)]) for k in lags])
     if not np.isfinite(r).any():
         return float("nan"), float("nan"), r
@@ -103,7 +104,8 @@ def _find(names: Sequence[str], candidates: Sequence[str]) -> int | None:
     return None
 
 
-def _wrists(names: Sequence[str]) -> list[int]:
+def wrist_indices(names: Sequence[str]) -> list[int]:
+    """Indices of the wrist joints (RightHand/LeftHand, b_r_wrist/b_l_wrist or RightWrist/LeftWrist)."""
     for pair in WRISTS:
         idx = [list(names).index(j) for j in pair if j in names]
         if idx:
@@ -131,7 +133,7 @@ def motion_feature(name: str, positions: npt.ArrayLike, joint_names: Sequence[st
         rot = np.asarray(head_rotations, dtype=np.float64)
         yaw = np.unwrap(np.arctan2(rot[:, 0, 2], rot[:, 2, 2]))
         return np.asarray(np.abs(np.gradient(np.degrees(yaw))) * positive(fps, "fps"))
-    w = _wrists(names)
+    w = wrist_indices(names)
     if name == "wrist_height":
         return np.asarray(x[:, w, 1].max(axis=1))
     if name == "hand_distance":
@@ -252,3 +254,14 @@ def phase_statistics(phases: Sequence[str], fps: float, names: Sequence[str] | N
         lengths = [m for q, m in runs if q == p]
         dur[p] = float(np.mean(lengths)) / fps if lengths else float("nan")
     return PhaseStatistics(order, prop, dur, trans)
+
+
+def read_phase_labels(path: str | os.PathLike[str]) -> list[str]:
+    """The ``phase`` column of a per-frame label CSV (``frame,phase,kind,keyword``, one row per frame)."""
+    import csv
+
+    with open(path, newline="", encoding="utf-8") as fh:
+        reader = csv.DictReader(fh)
+        if reader.fieldnames is None or "phase" not in reader.fieldnames:
+            raise InputError("expected a header with a 'phase' column", path=path, line=1)
+        return [row["phase"] for row in reader]

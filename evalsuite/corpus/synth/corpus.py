@@ -58,7 +58,7 @@ def _u(rng: np.random.Generator, pair: tuple[float, float]) -> float:
 
 def _sentences(rng: np.random.Generator, n: int, used: set[str], emphasis_rate: float) -> list[tuple[list[str], list[bool], list[int]]]:
     """``n`` new sentences: words, emphasis flags and the number of words of each phrase."""
-    out = []
+    out: list[tuple[list[str], list[bool], list[int]]] = []
     tries = 0
     while len(out) < n:
         s = make_sentence(rng)

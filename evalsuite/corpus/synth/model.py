@@ -11,9 +11,10 @@ Given words with times and emphasis flags, a seed and :class:`MotionParams`, :fu
    unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head shake and
    uses no arm.
 2. **renders** the units as keyframe tracks of arm poses (body.POSES) with minimum-jerk transitions, adds
-   per-word *batons* (the hands circle at ``baton_hz`` with a radius of ``baton_deg`` x gain x ``sin^(1/2)``
-   over the word, lagged ``baton_lag_s``: wrist speed follows speech, with stops between words), nods on emphasised words, head shakes, breathing and sway, and labels each
-   frame with the phase, gesture kind and keyword of the unit it belongs to.
+   *batons* (while a word is spoken the hands circle at ``baton_hz`` with a radius of ``baton_deg`` x gain
+   x ``sin(pi s)^(1/2)`` over each syllable, lagged ``baton_lag_s``: wrist speed follows speech and stops at
+   syllable onsets), nods on emphasised words, head shakes, breathing and sway, and labels each frame with
+   the phase, gesture kind and keyword of the unit it belongs to.
 
 Every random number is drawn in a fixed order whatever the switches, so the switches change only what
 they name: the same seed with ``offset_s=0.6`` is the same performance 0.6 s late.

@@ -65,4 +65,5 @@ class MotionParams:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> MotionParams:
         names = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in data.items() if k in names})
+        values: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items() if k in names}
+        return cls(**values)
