@@ -32,11 +32,15 @@ def _fgd_family(model_path, raw: bool):
 @click.option("--joints", default=None, help="Joint preset (e.g. genea2020_upper, genea2023) or comma-separated "
               "joint names; default: every joint of the natural motion.")
 @click.option("-m", "--metrics", multiple=True, help="Metric families (kinematics, histograms, errors, distribution, "
-              "cca, beats) or metric names, comma-separated or repeated; default: all (beats with --audio).")
+              "cca, beats, coupling) or metric names, comma-separated or repeated; default: all (beats with --audio, "
+              "beats and coupling with --corpus).")
 @click.option("--convention", type=click.Choice(["default", "genea2020", "genea2022", "aud2repr2pose"]),
               default="default", show_default=True, help="Scaling and binning conventions (see docs/metrics.md).")
 @click.option("--audio", "audio_dir", type=click.Path(path_type=pathlib.Path), default=None,
               help="Folder of <sequence>.wav speech audio for beat alignment.")
+@click.option("--corpus", "corpus_dir", type=click.Path(path_type=pathlib.Path), default=None, metavar="DIR",
+              help="Corpus whose segments the files belong to (matched by name = segment id): adds the speech-"
+              "gesture coupling metrics (and its speech for beat alignment).")
 @click.option("--sigma", type=float, default=0.1, show_default=True, help="Beat alignment sigma in seconds.")
 @click.option("--fps", type=float, default=None, help="Frame rate of .npy/.csv files (they store none).")
 @click.option("--resample", type=float, default=None, metavar="FPS",
@@ -60,7 +64,7 @@ def _fgd_family(model_path, raw: bool):
 @click.option("--fgd-raw", is_flag=True, help="With --fgd, also the raw-space FD of whole windows (slow: one "
               "eigendecomposition of window x pose dimensions per condition).")
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
-def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, sigma, fps, resample, speed_bins,
+def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, corpus_dir, sigma, fps, resample, speed_bins,
           acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, quiet):
     """Score generated motion (CONDITIONS) against natural motion (--reference).
 
@@ -82,7 +86,8 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
                            convention=convention, audio_dir=audio_dir, fps=fps, resample=resample,
                            speed_bins=speed_bins, acceleration_bins=acceleration_bins, groups=group_list,
                            sigma=sigma, bootstrap=bootstrap, seed=seed, jobs=jobs, dask_address=dask_address,
-                           strict=strict, progress=not quiet, figures=not no_figures, extra_families=extra)
+                           strict=strict, progress=not quiet, figures=not no_figures, extra_families=extra,
+                           corpus=corpus_dir)
     paths = write_outputs(result, out_dir)
     figures = [] if no_figures else write_figures(result, out_dir / "figures")
     for issue in result.issues:

@@ -110,11 +110,12 @@ def _selected_positions(motion: Any, joints: list[str]) -> np.ndarray:
 
 
 def _measure(motion: Any, pos: np.ndarray, setup: ScoreSetup, conv: Convention, natural_pos: np.ndarray | None,
-             onsets: np.ndarray | None, natural_cache: dict[Any, Any]) -> dict[str, Any]:
+             onsets: np.ndarray | None, natural_cache: dict[Any, Any], audio: tuple[np.ndarray, int] | None = None,
+             segment: Any = None) -> dict[str, Any]:
     if len(pos) < 4:
         raise InputError(f"only {len(pos)} frames; at least 4 are needed (jerk uses 3rd differences)",
                          path=motion.source)
-    ctx = SequenceContext(motion, pos, setup, conv, natural_pos, onsets, natural_cache)
+    ctx = SequenceContext(motion, pos, setup, conv, natural_pos, onsets, natural_cache, audio, segment)
     for family in setup.active():
         family.measure(ctx)
     if setup.figures:
@@ -122,23 +123,27 @@ def _measure(motion: Any, pos: np.ndarray, setup: ScoreSetup, conv: Convention, 
     return ctx.record
 
 
-def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path | None, ScoreSetup]) -> dict[str, Any]:
-    """Measure one sequence in every condition: ``task = (name, [(condition, path), ...], audio, setup)``.
+def score_sequence(task: tuple[Any, ...]) -> dict[str, Any]:
+    """Measure one sequence in every condition: ``task = (name, [(condition, path), ...], audio, setup[,
+    segment])`` (the corpus segment, with ``--corpus``).
 
     The first entry is the natural file. Returns ``{"name", "records": {condition: record}}`` where a
     record holds numpy summaries, or ``{"error": message}`` for a file that could not be scored.
     """
-    name, entries, audio_path, setup = task
+    name, entries, audio_path, setup = task[:4]
+    segment = task[4] if len(task) > 4 else None
     conv = get_convention(setup.convention)
     records: dict[str, dict[str, Any]] = {}
     onsets = None
+    audio = None
     audio_error = None
-    if audio_path is not None and any(f.needs_audio for f in setup.active()):
+    if audio_path is not None and any(f.needs_audio or f.needs_corpus for f in setup.active()):
         from evalsuite.audio import read_wav
 
         try:
             signal, sr = read_wav(audio_path)
-            onsets = audio_onsets(signal.mean(axis=1), sr)
+            audio = (signal.mean(axis=1), sr)
+            onsets = audio_onsets(audio[0], sr)
         except InputError as exc:
             audio_error = str(exc)
     natural_pos = None
@@ -149,7 +154,7 @@ def score_sequence(task: tuple[str, list[tuple[str, pathlib.Path]], pathlib.Path
             pos = _selected_positions(motion, setup.joints)
             if k == 0:
                 natural_pos = pos
-            rec = _measure(motion, pos, setup, conv, natural_pos, onsets, natural_cache)
+            rec = _measure(motion, pos, setup, conv, natural_pos, onsets, natural_cache, audio, segment)
             rec["sha256"] = file_sha256(path)
             rec["path"] = str(path)
             if getattr(motion, "resampled_from", None):
@@ -270,15 +275,17 @@ def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | path
                   acceleration_bins: str | tuple[float, float] | None = None,
                   groups: Sequence[str] = DEFAULT_GROUPS, sigma: float = 0.1, bootstrap: int = 0, seed: int = 0,
                   jobs: int = 1, dask_address: str | None = None, strict: bool = False, progress: bool = True,
-                  figures: bool = True, extra_families: Sequence[MetricFamily] = ()) -> ScoreResult:
+                  figures: bool = True, extra_families: Sequence[MetricFamily] = (),
+                  corpus: str | pathlib.Path | None = None) -> ScoreResult:
     """Score condition folders against a natural folder with every registered family (plus
-    ``extra_families``, e.g. FGD with a trained model) -> :class:`ScoreResult`."""
+    ``extra_families``, e.g. FGD with a trained model) -> :class:`ScoreResult`. With ``corpus``, files are
+    matched to its segments by name (stem = segment id), which brings their speech and transcripts."""
     conv = get_convention(convention)
     families = {**registered_families(), **{f.name: f for f in extra_families}}
-    metric_list = resolve_metrics(metrics, audio_dir is not None, families)
+    metric_list = resolve_metrics(metrics, audio_dir is not None, families, corpus is not None)
     for fam in extra_families:  # a family given for this run is wanted even when not named
         metric_list += [m.name for m in fam.metrics if m.name not in metric_list and fam.default]
-    plan = plan_scoring(reference, conditions, joints, audio_dir, strict, fps)
+    plan = plan_scoring(reference, conditions, joints, audio_dir, strict, fps, corpus)
     setup = ScoreSetup(joints=plan.joints, metrics=metric_list, family_objects=tuple(families.values()),
                        convention=conv.name, fps=fps, resample=resample,
                        groups=resolve_groups(groups, plan.joints), sigma=sigma, figures=figures)
@@ -287,7 +294,7 @@ def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | path
     tasks, weights = [], []
     for s in plan.names:
         entries = [(c, plan.files[c][s]) for c in plan.conditions if s in plan.files[c]]
-        tasks.append((s, entries, plan.audio.get(s), setup))
+        tasks.append((s, entries, plan.audio.get(s), setup, plan.segments.get(s)))
         weights.append(len(entries))
     folder = _Folder(setup, plan.reference, keep=bool(bootstrap))
     results = run(score_sequence, tasks, jobs=jobs, dask_address=dask_address, progress=progress,

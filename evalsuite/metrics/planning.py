@@ -10,7 +10,8 @@ from __future__ import annotations
 import pathlib
 import re
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 from evalsuite.errors import InputError
 from evalsuite.metrics.families import MetricFamily, metric_index, registered_families
@@ -37,13 +38,16 @@ class Plan:
     audio: dict[str, pathlib.Path]
     issues: list[str]
     joints: list[str]
+    segments: dict[str, Any] = field(default_factory=dict)   # sequence -> corpus Segment (with --corpus)
 
 
 def resolve_metrics(spec: str | Sequence[str] | None, audio: bool,
-                    families: dict[str, MetricFamily] | None = None) -> list[str]:
+                    families: dict[str, MetricFamily] | None = None, corpus: bool = False) -> list[str]:
     """Metric names from family or metric names (comma-separated string or list).
 
-    Default: every default family's metrics, plus those that need audio when ``audio`` is given."""
+    Default: every default family's metrics, plus those that need audio when ``audio`` is given and those
+    that need a corpus when ``corpus`` is (a corpus brings its audio)."""
+    audio = audio or corpus
     fams = registered_families() if families is None else families
     index = metric_index(fams)
 
@@ -51,7 +55,8 @@ def resolve_metrics(spec: str | Sequence[str] | None, audio: bool,
         return [m.name for m in fams[name].metrics]
 
     def default_set() -> list[str]:
-        return [m for f, fam in fams.items() if fam.default or (fam.needs_audio and audio)
+        return [m for f, fam in fams.items()
+                if fam.default or (fam.needs_audio and audio and not fam.needs_corpus) or (fam.needs_corpus and corpus)
                 for m in family_metrics(f)]
 
     if spec is None or spec == "" or spec == ():
@@ -71,6 +76,10 @@ def resolve_metrics(spec: str | Sequence[str] | None, audio: bool,
             raise InputError(f"unknown metric {item!r}; expected families {', '.join(fams)} or metrics "
                              f"{', '.join(index)}", field="metrics")
         out.extend(n for n in names if n not in out)
+    without = [m for m in out if fams[index[m][0]].needs_corpus]
+    if without and not corpus:
+        raise InputError(f"{', '.join(without)} need(s) a corpus with the speech and transcripts: pass --corpus DIR "
+                         "(segments matched to files by name)", field="metrics")
     needing = [m for m in out if fams[index[m][0]].needs_audio]
     if needing and not audio:
         raise InputError(f"{', '.join(needing)} need(s) speech audio: pass --audio AUDIO_DIR with <sequence>.wav "
@@ -126,10 +135,30 @@ def _audio_files(audio_dir: str | pathlib.Path, ref_names: list[str], issues: li
     return audio
 
 
+def _load_corpus(path: str | pathlib.Path) -> Any:
+    """The corpus at ``path``. TO BE REPLACED by ``evalsuite.corpus.load_corpus`` (the corpus readers) when
+    they are merged; until then this reads the synthetic speaker's GENEA 2023 layout only."""
+    from evalsuite.corpus.synth.layout import read_synth_corpus
+
+    return read_synth_corpus(path)
+
+
+def _corpus_segments(corpus_dir: str | pathlib.Path, ref_names: list[str], issues: list[str]) -> dict[str, Any]:
+    segments = {s.id: s for s in _load_corpus(corpus_dir)}
+    lacking = [s for s in ref_names if s not in segments]
+    if len(lacking) == len(ref_names):
+        raise InputError("no corpus segment id matches any natural file name (files are matched to segments "
+                         "by stem)", path=corpus_dir)
+    if lacking:
+        issues.append(f"no corpus segment for {len(lacking)} sequences (coupling metrics skipped there): "
+                      f"{', '.join(lacking[:10])}")
+    return {s: segments[s] for s in ref_names if s in segments}
+
+
 def plan_scoring(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path],
                  joints: str | Sequence[str] | None = None,
                  audio_dir: str | pathlib.Path | None = None, strict: bool = False,
-                 fps: float | None = None) -> Plan:
+                 fps: float | None = None, corpus: str | pathlib.Path | None = None) -> Plan:
     """Pair files by name, check folders, resolve the joint set (see the module docstring)."""
     ref_name, ref_path = parse_condition(reference)
     pairs = [(ref_name, ref_path)] + [parse_condition(c) for c in conditions]
@@ -142,6 +171,10 @@ def plan_scoring(reference: str | pathlib.Path, conditions: Sequence[str | pathl
     issues = _pairing_issues(files, ref_name, names[1:], strict)
     ref_names = sorted(files[ref_name])
     audio = _audio_files(audio_dir, ref_names, issues) if audio_dir is not None else {}
+    segments = _corpus_segments(corpus, ref_names, issues) if corpus is not None else {}
+    for s, seg in segments.items():  # a corpus brings its speech
+        if s not in audio and seg.audio is not None:
+            audio[s] = seg.audio
     # The joint set comes from the first readable natural file.
     first = None
     errors = []
@@ -166,7 +199,7 @@ def plan_scoring(reference: str | pathlib.Path, conditions: Sequence[str | pathl
         joint_list = sorted(dict.fromkeys(joint_list), key=order.__getitem__)
     else:
         joint_list = list(available)
-    return Plan(ref_name, names, dict(pairs), files, ref_names, audio, issues, joint_list)
+    return Plan(ref_name, names, dict(pairs), files, ref_names, audio, issues, joint_list, segments)
 
 
 def find_group(group: str, names: Sequence[str]) -> list[str]:

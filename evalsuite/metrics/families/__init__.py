@@ -62,9 +62,9 @@ def metric_index(families: dict[str, MetricFamily] | None = None) -> dict[str, t
 
 
 def _register_builtins() -> None:
-    from evalsuite.metrics.families import beats, cca, distribution, errors, histograms, kinematics
+    from evalsuite.metrics.families import beats, cca, coupling, distribution, errors, histograms, kinematics
 
-    for module in (kinematics, histograms, errors, distribution, cca, beats):
+    for module in (kinematics, histograms, errors, distribution, cca, beats, coupling):
         register_family(module.FAMILY, replace=True)
 
 

@@ -50,6 +50,7 @@ class MetricFamily:
     metrics: tuple[MetricInfo, ...] = ()
     default: bool = True            # part of the default metric set
     needs_audio: bool = False       # only with speech audio (``--audio``)
+    needs_corpus: bool = False      # only with a corpus (``--corpus``): the segment's transcript and audio
 
     def measure(self, ctx: SequenceContext) -> None:
         """Write this family's per-sequence summaries into ``ctx.record``."""
@@ -70,11 +71,14 @@ class SequenceContext:
     ``pos``: the file's positions of the scored joints ``(T, J, 3)``; ``natural_pos`` the natural file's
     (None while measuring the natural file itself is not the case: the natural file is measured first and
     sees itself); ``cache``: per-file values shared by families (e.g. derivative norms);
-    ``natural_cache``: per-sequence values shared across the sequence's conditions.
+    ``natural_cache``: per-sequence values shared across the sequence's conditions; ``audio``: the
+    sequence's speech ``(mono signal, sample rate)`` when read; ``segment``: its corpus segment
+    (:class:`evalsuite.corpus.Segment`, with the transcript) when scoring with a corpus.
     """
 
     def __init__(self, motion: Any, pos: np.ndarray, setup: Any, conv: Convention, natural_pos: np.ndarray | None,
-                 audio_onsets: np.ndarray | None, natural_cache: dict[Any, Any]):
+                 audio_onsets: np.ndarray | None, natural_cache: dict[Any, Any],
+                 audio: tuple[np.ndarray, int] | None = None, segment: Any = None):
         self.motion = motion
         self.pos = pos
         self.fps = float(motion.fps)
@@ -83,6 +87,8 @@ class SequenceContext:
         self.natural_pos = natural_pos
         self.audio_onsets = audio_onsets
         self.natural_cache = natural_cache
+        self.audio = audio
+        self.segment = segment
         self.cache: dict[str, Any] = {}
         self.record: dict[str, Any] = {"fps": self.fps, "n_frames": int(len(pos))}
 

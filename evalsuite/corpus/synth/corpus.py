@@ -1,0 +1,177 @@
+"""Writing a synthetic-speaker corpus: :func:`synthesize_corpus`.
+
+Per segment (about ``segment_s`` seconds of several sentences): sentences from the grammar (unique across
+the whole corpus, so splits share no sentence), emphasis flags, espeak-ng speech laid out word by word
+(gaps of ``word_gap_s`` between words, ``phrase_pause_s`` at commas, ``sentence_pause_s`` between
+sentences and now and then a ``long_pause_s`` in which the speaker returns to rest), and the motion
+model's performance of it (:func:`evalsuite.corpus.synth.model.oracle_motion` with the segment's own
+motion seed). Everything is seeded: one seed gives byte-identical files on one machine.
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from evalsuite.audio import write_wav
+from evalsuite.corpus.synth.grammar import KEYWORD_CLASSES, LEXICON, choose_emphasis, make_sentence
+from evalsuite.corpus.synth.layout import FORMAT, FORMAT_VERSION, SPLIT_DIRS, format_tsv, segment_paths
+from evalsuite.corpus.synth.model import oracle_motion
+from evalsuite.corpus.synth.params import KINDS, PHASES, MotionParams
+from evalsuite.corpus.synth.speech import Voice, WordBank, espeak_version
+from evalsuite.corpus.types import Transcript, Word
+from evalsuite.errors import InputError
+from evalsuite.motion.bvh_writer import format_bvh
+
+__all__ = ["Layout", "synthesize_corpus", "assign_splits"]
+
+
+@dataclass(frozen=True)
+class Layout:
+    """How sentences become a segment's timeline (seconds; pairs are uniform ranges)."""
+
+    segment_s: float = 20.0
+    lead_s: tuple[float, float] = (0.3, 0.6)
+    word_gap_s: tuple[float, float] = (0.03, 0.09)
+    phrase_pause_s: tuple[float, float] = (0.25, 0.45)
+    sentence_pause_s: tuple[float, float] = (0.5, 1.0)
+    long_pause_p: float = 0.2
+    long_pause_s: tuple[float, float] = (1.6, 2.6)
+    tail_s: float = 0.5
+    emphasis_rate: float = 0.25
+
+
+def assign_splits(n: int, rng: np.random.Generator, val: float = 0.1, test: float = 0.1) -> list[str]:
+    """Split names for ``n`` segments: a seeded permutation, at least one val and one test segment when n >= 3."""
+    n_val = max(1 if n >= 3 else 0, int(round(val * n)))
+    n_test = max(1 if n >= 3 else 0, int(round(test * n)))
+    names = ["val"] * n_val + ["test"] * n_test + ["train"] * (n - n_val - n_test)
+    return [names[i] for i in rng.permutation(n)]
+
+
+def _u(rng: np.random.Generator, pair: tuple[float, float]) -> float:
+    return float(rng.uniform(pair[0], pair[1]))
+
+
+def _sentences(rng: np.random.Generator, n: int, used: set[str], emphasis_rate: float) -> list[tuple[list[str], list[bool], list[int]]]:
+    """``n`` new sentences: words, emphasis flags and the number of words of each phrase."""
+    out: list[tuple[list[str], list[bool], list[int]]] = []
+    tries = 0
+    while len(out) < n:
+        s = make_sentence(rng)
+        tries += 1
+        if s.text in used:
+            if tries > 200 * n + 1000:
+                raise InputError("the grammar has run out of new sentences for a corpus this long")
+            continue
+        used.add(s.text)
+        words = s.words
+        out.append((words, choose_emphasis(words, rng, emphasis_rate), [len(p) for p in s]))
+    return out
+
+
+def _segment_audio(sentences: list[tuple[list[str], list[bool], list[int]]], bank: WordBank, layout: Layout,
+                   rng: np.random.Generator) -> tuple[np.ndarray, Transcript, list[bool], list[str], float]:
+    """Lay out sentences until ``segment_s``: int16 samples, transcript, emphasis, sentence texts, duration."""
+    rate = bank.rate or 22050
+    pieces: list[np.ndarray] = []
+    pos = int(round(_u(rng, layout.lead_s) * rate))
+    pieces.append(np.zeros(pos, dtype=np.int16))
+    words: list[Word] = []
+    flags: list[bool] = []
+    texts: list[str] = []
+    for k, (sent, emph, phrase_lens) in enumerate(sentences):
+        if k and pos / rate > layout.segment_s - 2.0:
+            break
+        if k:
+            pause = _u(rng, layout.long_pause_s) if rng.random() < layout.long_pause_p else _u(rng, layout.sentence_pause_s)
+            pieces.append(np.zeros(int(round(pause * rate)), dtype=np.int16))
+            pos += len(pieces[-1])
+        ends = set(np.cumsum(phrase_lens)[:-1].tolist())
+        for i, (w, e) in enumerate(zip(sent, emph)):
+            if i:
+                gap = _u(rng, layout.phrase_pause_s) if i in ends else _u(rng, layout.word_gap_s)
+                pieces.append(np.zeros(int(round(gap * rate)), dtype=np.int16))
+                pos += len(pieces[-1])
+            clip = bank[(w, e)]
+            words.append(Word(w, round(pos / rate, 6), round((pos + len(clip)) / rate, 6)))
+            flags.append(e)
+            pieces.append(clip)
+            pos += len(clip)
+        texts.append(" ".join(sent))
+    pieces.append(np.zeros(int(round(layout.tail_s * rate)), dtype=np.int16))
+    audio = np.concatenate(pieces)
+    return audio, Transcript(tuple(words)), flags, texts, len(audio) / rate
+
+
+def _clip_onsets(bank: WordBank) -> dict[tuple[str, bool], list[float]]:
+    """Acoustic onsets (s after the word's start, 4 decimals) of every clip: spectral-flux peaks
+    (:func:`evalsuite.metrics.beats.audio_onsets`) of the clip between 0.3 s of silence."""
+    from evalsuite.metrics.beats import audio_onsets
+
+    rate = int(bank.rate or 22050)
+    pad = np.zeros(int(0.3 * rate))
+    out = {}
+    for key, clip in sorted(bank.clips.items()):
+        on = audio_onsets(np.concatenate([pad, clip / 32768.0, pad]), rate) - 0.3
+        out[key] = [round(float(o), 4) for o in on if 0.0 <= o < len(clip) / rate]
+    return out
+
+
+def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0, *, layout: Layout | None = None,
+                      voice: Voice | None = None, params: MotionParams | None = None, speaker: str = "synth01",
+                      jobs: int = 2, progress: bool = True) -> dict[str, Any]:
+    """Write a synthetic-speaker corpus of about ``minutes`` minutes to ``out_dir``; returns ``corpus.json``'s
+    content. See docs/corpus_synth.md for the model and the files."""
+    from tqdm import tqdm
+
+    layout, voice, params = layout or Layout(), voice or Voice(), params or MotionParams()
+    if not minutes > 0:
+        raise InputError(f"minutes must be positive, got {minutes!r}", field="minutes")
+    root = pathlib.Path(out_dir)
+    if root.exists() and any(root.iterdir()):
+        raise InputError("the output folder exists and is not empty", path=root)
+    n_seg = max(3, int(round(minutes * 60.0 / layout.segment_s)))
+    splits = assign_splits(n_seg, np.random.default_rng([seed, 1]))
+    text_rng = np.random.default_rng([seed, 0])
+    used: set[str] = set()
+    per_seg = int(np.ceil(layout.segment_s / 2.0)) + 2     # sentences take > 2 s each with their pauses
+    pools = [_sentences(text_rng, per_seg, used, layout.emphasis_rate) for _ in range(n_seg)]
+    bank = WordBank(voice, jobs)
+    bank.add((w, e) for pool in pools for sent, emph, _ in pool for w, e in zip(sent, emph))
+    clip_onsets = _clip_onsets(bank)
+    meta: dict[str, Any] = {
+        "format": FORMAT, "format_version": FORMAT_VERSION, "seed": int(seed), "minutes": float(minutes),
+        "speaker": speaker, "fps": params.fps, "sample_rate": bank.rate, "espeak_ng": espeak_version(),
+        "voice": asdict(voice), "layout": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(layout).items()},
+        "model": {"name": "evalsuite.corpus.synth.model", "version": 1, "params": params.to_dict(),
+                  "phases": list(PHASES), "kinds": list(KINDS)},
+        "keyword_classes": {c: list(ws) for c, ws in KEYWORD_CLASSES.items()},
+        "lexicon": {k: list(v) for k, v in LEXICON.items()},
+        "split_dirs": SPLIT_DIRS, "splits": {s: [] for s in SPLIT_DIRS}, "segments": {},
+    }
+    for idx in tqdm(range(n_seg), desc="synthetic speaker", unit="segment", disable=not progress):
+        seg_id, split = f"seg_{idx:03d}", splits[idx]
+        rng = np.random.default_rng([seed, 2, idx])
+        audio, transcript, flags, texts, duration = _segment_audio(pools[idx], bank, layout, rng)
+        motion_seed = int(np.random.SeedSequence([seed, 3, idx]).generate_state(1)[0])
+        onsets = [clip_onsets[(w.text, f)] for w, f in zip(transcript.words, flags)]
+        motion, labels = oracle_motion(transcript, duration, motion_seed, flags, params, name=seg_id, onsets=onsets)
+        paths = segment_paths(root, split, seg_id)
+        for p in paths.values():
+            p.parent.mkdir(parents=True, exist_ok=True)
+        write_wav(paths["wav"], audio.astype(np.float64) / 32768.0, int(bank.rate or 22050))
+        paths["bvh"].write_text(format_bvh(motion.skeleton, motion.values, 1.0 / params.fps), encoding="utf-8",
+                                newline="\n")
+        paths["tsv"].write_text(format_tsv(transcript), encoding="utf-8", newline="\n")
+        paths["labels"].write_text(labels.to_csv(), encoding="utf-8", newline="\n")
+        meta["splits"][split].append(seg_id)
+        meta["segments"][seg_id] = {"split": split, "duration": duration, "n_frames": motion.n_frames,
+                                    "motion_seed": motion_seed, "n_words": len(transcript),
+                                    "emphasis": [i for i, f in enumerate(flags) if f], "onsets": onsets,
+                                    "sentences": texts}
+    (root / "corpus.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    return meta

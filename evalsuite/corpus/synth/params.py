@@ -1,0 +1,69 @@
+"""Parameters of the synthetic speaker's motion model (all stored in ``corpus.json``).
+
+Times are seconds, angles degrees; a pair ``(lo, hi)`` is a uniform random range drawn per gesture.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["MotionParams", "PHASES", "KINDS"]
+
+PHASES = ("rest", "preparation", "stroke", "hold", "retraction")
+KINDS = ("none", "beat", "up", "wide", "self", "point", "negation")
+
+
+@dataclass(frozen=True)
+class MotionParams:
+    """The procedural model's parameters (see docs/corpus_synth.md for the formulas).
+
+    The last four are the switches of the known-truth benchmark: ``offset_s`` delays every speech-driven
+    event (beats, batons, nods, semantic gestures) by that many seconds; ``beats`` / ``semantic`` turn
+    beat gestures (with word batons and nods) / semantic gestures (with head shakes) off; ``amplitude``
+    scales every gesture's excursion from the rest pose (idle motion is not scaled).
+    """
+
+    fps: float = 30.0
+    beat_p: float = 0.85                          # an emphasised ordinary word gets a beat
+    semantic_p: float = 0.9                       # a keyword gets its class's semantic gesture
+    beat_lag_s: tuple[float, float] = (0.0, 0.12)     # stroke end after the word's onset
+    semantic_lag_s: tuple[float, float] = (0.05, 0.2)
+    beat_stroke_s: tuple[float, float] = (0.18, 0.28)
+    semantic_stroke_s: tuple[float, float] = (0.4, 0.6)
+    prep_s: tuple[float, float] = (0.35, 0.6)
+    beat_hold_s: tuple[float, float] = (0.08, 0.2)
+    semantic_hold_s: tuple[float, float] = (0.3, 0.6)   # after the keyword's end
+    retract_s: tuple[float, float] = (0.8, 1.2)
+    rest_gap_s: float = 0.6                       # retract when the arm is free at least this long after retraction
+    gesture_amplitude: tuple[float, float] = (0.75, 1.2)
+    hands_p: tuple[float, float, float] = (0.55, 0.2, 0.25)   # right, left, both (beats, raise, point, chest)
+    baton_deg: float = 9.0                        # circling radius per spoken word, x emphasis_gain when emphasised
+    baton_hz: float = 3.0
+    emphasis_gain: float = 1.8
+    baton_lag_s: float = 0.0
+    min_syllable_s: float = 0.08                  # onsets closer than this to a word's edges do not cut it
+    nod_deg: float = 5.0
+    shake_deg: float = 14.0
+    shake_hz: float = 2.5
+    shake_cycles: float = 2.0
+    breath_hz: tuple[float, float] = (0.2, 0.3)
+    breath_deg: float = 1.5
+    sway_deg: float = 1.5
+    sway_hz: tuple[float, float] = (0.04, 0.2)
+    offset_s: float = 0.0
+    beats: bool = True
+    semantic: bool = True
+    amplitude: float = 1.0
+
+    def replace(self, **changes: Any) -> MotionParams:
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> MotionParams:
+        names = {f.name for f in dataclasses.fields(cls)}
+        values: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items() if k in names}
+        return cls(**values)
