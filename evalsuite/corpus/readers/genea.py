@@ -11,7 +11,7 @@ from typing import Any
 from evalsuite.corpus.readers.base import CorpusBuilder, register_layout
 from evalsuite.errors import InputError
 
-_SPLIT_DIRS = ("trn", "val", "tst")
+_SPLIT_DIRS = ("trn", "val", "tst", "train", "test")  # GENEA names; the canonical ones accepted too
 _MOTION = (".bvh", ".npz", ".npy", ".csv")
 
 
