@@ -20,7 +20,7 @@ def test_info_prints_layout_splits_speakers_rates_and_what_is_missing(tmp_path):
     lines = r.output.splitlines()
     assert "layout:     genea2023" in lines
     assert "segments:   4, 12.0 s (0:00:12.0)" in lines
-    assert "  train    2 segments, 6.0 s (0:00:06.0), 2 speakers" in lines
+    assert "  train      2 segments, 6.0 s (0:00:06.0), 2 speakers" in lines
     assert "speakers:   3 (01, 02, 03)" in lines
     assert "audio:      16000 Hz x4; channels 1 x4" in lines
     assert "motion:     30 fps x3" in lines

@@ -263,3 +263,17 @@ def test_the_interlocutor_streams_durations_are_checked_too(tmp_path):
         load_corpus(root)
     c = load_corpus(root, on_mismatch="skip")
     assert "val_2023_v0_000" not in {s.id for s in c} and c.meta["skipped"] == ["val_2023_v0_000"]
+
+
+@pytest.mark.parametrize("durations, val, test", [((0.1, 0.1, 10.0), 0.1, 0.5), ((10.0, 0.1, 0.1), 0.4, 0.1),
+                                                  ((1.0, 1.0, 1.0, 1.0), 0.45, 0.45)])
+def test_every_split_asked_for_gets_a_speaker_whatever_the_durations(tmp_path, durations, val, test):
+    root = tmp_path / "few"
+    for k, d in enumerate(durations):
+        wav(root / f"s{k}.wav", d, rate=8000)
+    (root / "splits.csv").write_text("segment,split,speaker\n" + "".join(f"s{k},train,p{k}\n"
+                                                                        for k in range(len(durations))))
+    c = load_corpus(root)
+    for seed in range(8):
+        d = split_corpus(c, val=val, test=test, seed=seed)
+        assert {s.split for s in d} == {"train", "val", "test"} and d.meta["split"]["speakers_disjoint"]

@@ -94,12 +94,16 @@ def summarize(c: Corpus) -> dict[str, Any]:
     def dur(segs: Any) -> float:
         return float(sum(s.duration or 0.0 for s in segs))
 
-    order = [s for s in SPLITS if any(seg.split == s for seg in c)] + \
-        sorted({str(seg.split) for seg in c if seg.split not in SPLITS})
-    splits = {name: {"segments": len(segs), "duration": dur(segs), "speakers": sorted({str(s.speaker) for s in segs
-                                                                                     if s.speaker is not None})}
-              for name in order for segs in [[s for s in c if str(s.split) == name or s.split == name]]}
-    count = Counter  # noqa: N806 - a short alias
+    def split_name(seg: Any) -> str:
+        return str(seg.split) if seg.split is not None else "unassigned"
+
+    names = {split_name(seg) for seg in c}
+    order = [n for n in SPLITS if n in names] + sorted(names - set(SPLITS))
+    splits = {}
+    for name in order:
+        segs = [s for s in c if split_name(s) == name]
+        splits[name] = {"segments": len(segs), "duration": dur(segs),
+                        "speakers": sorted({str(s.speaker) for s in segs if s.speaker is not None})}
     missing: dict[str, list[str]] = {}
     for s in c:
         for part in s.meta.get("missing", []):
@@ -107,12 +111,12 @@ def summarize(c: Corpus) -> dict[str, Any]:
     return {
         "root": str(c.root), "layout": c.layout, "segments": len(c), "duration": dur(c), "splits": splits,
         "speakers": list(c.speakers),
-        "audio_rates": {str(k): v for k, v in sorted(count(s.meta.get("audio_rate") for s in c
+        "audio_rates": {str(k): v for k, v in sorted(Counter(s.meta.get("audio_rate") for s in c
                                                            if s.audio is not None).items())},
-        "audio_channels": {str(k): v for k, v in sorted(count(s.meta.get("audio_channels") for s in c
+        "audio_channels": {str(k): v for k, v in sorted(Counter(s.meta.get("audio_channels") for s in c
                                                               if s.audio is not None).items())},
         "motion_fps": {f"{k:g}" if isinstance(k, float) else str(k): v
-                       for k, v in sorted(count(s.meta.get("motion_fps") for s in c if s.motion is not None).items(),
+                       for k, v in sorted(Counter(s.meta.get("motion_fps") for s in c if s.motion is not None).items(),
                                           key=lambda kv: (kv[0] is None, kv[0] or 0))},
         "transcripts": sum(s.transcript is not None for s in c),
         "estimated_transcripts": sum(s.transcript is not None and s.transcript.estimated for s in c),
@@ -133,7 +137,7 @@ def _print_info(info: dict[str, Any]) -> None:
     echo(f"layout:     {info['layout']}")
     echo(f"segments:   {info['segments']}, {_seconds(info['duration'])}")
     for name, sp in info["splits"].items():
-        echo(f"  {name:<8} {sp['segments']} segments, {_seconds(sp['duration'])}, "
+        echo(f"  {name:<10} {sp['segments']} segments, {_seconds(sp['duration'])}, "
              f"{len(sp['speakers'])} speakers")
     spk = info["speakers"]
     echo(f"speakers:   {len(spk)}" + (f" ({', '.join(spk[:20])}{', ...' if len(spk) > 20 else ''})" if spk else ""))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import os
-from collections import defaultdict
+from collections import Counter, defaultdict
 
 import numpy as np
 
@@ -63,13 +63,13 @@ def split_corpus(corpus: Corpus, val: float = 0.1, test: float = 0.1, seed: int 
         order = [speakers[i] for i in rng.permutation(len(speakers))]
         groups = [by_speaker[sp] for sp in order]
         names = _assign(groups, val, test)
-        # every split asked for gets at least one speaker, and train keeps at least one
-        for want in [n for n, f in (("test", test), ("val", val)) if f > 0]:
+        # every split asked for gets at least one speaker: a split left empty by the greedy cut takes the last
+        # speaker of the split with the most speakers (there is one with two, as speakers >= splits asked for)
+        for want in ["train"] + [n for n, f in (("test", test), ("val", val)) if f > 0]:
             if want not in names:
-                i = max(i for i, n in enumerate(names) if n == "train")
-                names[i] = want
-        if "train" not in names:
-            names[-1] = "train"
+                counts = Counter(names)
+                donor = max(counts, key=lambda n: (counts[n], n))
+                names[max(i for i, n in enumerate(names) if n == donor)] = want
         split_of = {s.id: n for g, n in zip(groups, names) for s in g}
     else:
         segs = [corpus.segments[i] for i in rng.permutation(len(corpus))]

@@ -11,7 +11,7 @@ from typing import Any
 from evalsuite.corpus.readers.base import CorpusBuilder, register_layout
 from evalsuite.errors import InputError
 
-_SPLIT_DIRS = ("trn", "val", "tst")
+_SPLIT_DIRS = ("trn", "val", "tst", "train", "test")  # GENEA names; the canonical ones accepted too
 _MOTION = (".bvh", ".npz", ".npy", ".csv")
 
 
@@ -28,7 +28,8 @@ def _child(folder: pathlib.Path, name: str) -> pathlib.Path | None:
 def _stems(folder: pathlib.Path | None, suffixes: tuple[str, ...]) -> dict[str, pathlib.Path]:
     if folder is None or not folder.is_dir():
         return {}
-    return {p.stem: p for p in sorted(folder.iterdir()) if p.is_file() and p.suffix.lower() in suffixes}
+    return {p.stem: p for p in sorted(folder.iterdir())
+            if p.is_file() and p.suffix.lower() in suffixes and not p.name.startswith(".")}  # not macOS ._ files
 
 
 def _split_of(name: str) -> str | None:
