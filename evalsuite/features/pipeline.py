@@ -2,6 +2,7 @@
 :mod:`evalsuite.features.base`."""
 from __future__ import annotations
 
+import logging
 import os
 import pathlib
 from typing import Any
@@ -22,6 +23,8 @@ from evalsuite.features.base import (
 from evalsuite.features.cache import cache_key, cache_load, cache_store, default_cache_dir
 
 __all__ = ["extract"]
+
+log = logging.getLogger(__name__)
 
 
 def extract(name: str, audio: AudioInput | Audio | None, *, fps: float | None = None, n_frames: int | None = None,
@@ -77,7 +80,8 @@ def extract(name: str, audio: AudioInput | Audio | None, *, fps: float | None = 
         if cache and key is not None:
             cache_store(folder, key, data)
 
-    if recipe.native_fps is not None and fps is not None:
+    if recipe.native_fps is not None and fps is not None and abs(fps - recipe.native_fps) > 1e-9 * fps:
+        log.info("%s: resampled from %.6g to %.6g fps by linear interpolation in time", name, recipe.native_fps, fps)
         data = resample_frames(data, recipe.native_fps, float(fps))
     if n_frames is not None:
         data = fit_length(data, n_frames)
