@@ -47,7 +47,11 @@ def extract(name: str, audio: AudioInput | Audio | None, *, fps: float | None = 
         known = ", ".join(sorted(recipe.params)) or "none"
         raise InputError(f"recipe {name!r} has no option {', '.join(unknown)} (its options: {known})",
                          field=unknown[0])
-    if fps is not None and (isinstance(fps, bool) or not np.isfinite(fps) or fps <= 0):
+    if n_frames is not None and (isinstance(n_frames, bool) or not isinstance(n_frames, (int, np.integer))
+                                 or n_frames < 0):
+        raise InputError(f"n_frames must be a non-negative integer, got {n_frames!r}", field="n_frames")
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float, np.number))
+                            or not np.isfinite(fps) or fps <= 0):
         raise InputError(f"the frame rate must be a positive number, got {fps!r}", field="fps")
     if fps is not None and recipe.native_fps is not None and not recipe.resamplable \
             and abs(fps - recipe.native_fps) > 1e-9:
