@@ -46,6 +46,7 @@ def test_writes_the_array(tmp_path, wav, recipe, fps, shape):
     x = np.load(out)
     assert x.shape == shape and x.dtype == np.float32
     assert f"{recipe} {shape}" in r.output
+    assert ("by linear interpolation" in r.output) == (fps is not None)
 
 
 def test_text_recipe_from_a_tsv_transcript_and_options(tmp_path, wav):

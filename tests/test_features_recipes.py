@@ -171,6 +171,12 @@ def test_demo_recipes_equal_the_originals_arrays():
     np.testing.assert_allclose(extract("mfcc_kucherenko", DEMO_WAV, cache=False, dtype=np.float64).shape, (399, 26))
 
 
+def _words():
+    from evalsuite.corpus.types import Transcript, Word
+
+    return Transcript((Word("hi", 0.0, 0.5),))
+
+
 def test_errors_name_the_file_the_recipe_and_the_option(tmp_path, wav44):
     with pytest.raises(InputError, match=r"missing\.wav: no such audio file"):
         extract("mfcc_kucherenko", tmp_path / "missing.wav", cache=False)
@@ -185,6 +191,10 @@ def test_errors_name_the_file_the_recipe_and_the_option(tmp_path, wav44):
         extract("pitch", wav44, cache=False, winlen=0.1)
     with pytest.raises(InputError, match=r"fps: the frame rate must be a positive number, got -5"):
         extract("pitch", wav44, fps=-5, cache=False)
+    with pytest.raises(InputError, match=r"n_frames: n_frames must be a non-negative integer, got -1"):
+        extract("text_timing", None, transcript=_words(), n_frames=-1, cache=False)
+    with pytest.raises(InputError, match=r"fps: the frame rate must be a positive number, got '20'"):
+        extract("pitch", wav44, fps="20", cache=False)
     with pytest.raises(InputError, match=r"gives 20 fps only, not 30"):
         extract("aud2repr2pose_demo_windows", wav44, fps=30, cache=False)
     with pytest.raises(InputError, match=r"shape \(N,\) or \(N, C\)"):

@@ -119,4 +119,10 @@ def features(audio, recipe, fps, n_frames, transcript, options, cache_dir, no_ca
                    cache_dir=cache_dir, **_parse_options(options))
     output.parent.mkdir(parents=True, exist_ok=True)
     np.save(output, data)
-    click.echo(f"{output}: {recipe} {tuple(data.shape)} float32")
+    from evalsuite.features import get_recipe
+
+    native = get_recipe(recipe).native_fps
+    how = ""
+    if native is not None and fps is not None and abs(fps - native) > 1e-9 * fps:
+        how = f" (resampled from {native:.6g} fps by linear interpolation in time)"
+    click.echo(f"{output}: {recipe} {tuple(data.shape)} float32{how}")

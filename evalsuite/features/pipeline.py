@@ -2,6 +2,7 @@
 :mod:`evalsuite.features.base`."""
 from __future__ import annotations
 
+import logging
 import os
 import pathlib
 from typing import Any
@@ -22,6 +23,8 @@ from evalsuite.features.base import (
 from evalsuite.features.cache import cache_key, cache_load, cache_store, default_cache_dir
 
 __all__ = ["extract"]
+
+log = logging.getLogger(__name__)
 
 
 def extract(name: str, audio: AudioInput | Audio | None, *, fps: float | None = None, n_frames: int | None = None,
@@ -44,7 +47,11 @@ def extract(name: str, audio: AudioInput | Audio | None, *, fps: float | None = 
         known = ", ".join(sorted(recipe.params)) or "none"
         raise InputError(f"recipe {name!r} has no option {', '.join(unknown)} (its options: {known})",
                          field=unknown[0])
-    if fps is not None and (isinstance(fps, bool) or not np.isfinite(fps) or fps <= 0):
+    if n_frames is not None and (isinstance(n_frames, bool) or not isinstance(n_frames, (int, np.integer))
+                                 or n_frames < 0):
+        raise InputError(f"n_frames must be a non-negative integer, got {n_frames!r}", field="n_frames")
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float, np.number))
+                            or not np.isfinite(fps) or fps <= 0):
         raise InputError(f"the frame rate must be a positive number, got {fps!r}", field="fps")
     if fps is not None and recipe.native_fps is not None and not recipe.resamplable \
             and abs(fps - recipe.native_fps) > 1e-9:
@@ -77,7 +84,8 @@ def extract(name: str, audio: AudioInput | Audio | None, *, fps: float | None = 
         if cache and key is not None:
             cache_store(folder, key, data)
 
-    if recipe.native_fps is not None and fps is not None:
+    if recipe.native_fps is not None and fps is not None and abs(fps - recipe.native_fps) > 1e-9 * fps:
+        log.info("%s: resampled from %.6g to %.6g fps by linear interpolation in time", name, recipe.native_fps, fps)
         data = resample_frames(data, recipe.native_fps, float(fps))
     if n_frames is not None:
         data = fit_length(data, n_frames)
