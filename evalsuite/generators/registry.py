@@ -35,6 +35,11 @@ BUILTIN: dict[str, str] = {
     "fluctuation": "evalsuite.generators.conditions.degradations:Fluctuation",
     "fixing": "evalsuite.generators.conditions.degradations:Fixing",
     "smoothed": "evalsuite.generators.conditions.degradations:Smoothed",
+    # re-implementations of the seed papers (trainable on a CPU)
+    "gesticulator": "evalsuite.generators.gesticulator.plugin:Gesticulator",
+    "aud2pose": "evalsuite.generators.aud2repr2pose.plugin:Aud2Pose",
+    "aud2motion": "evalsuite.generators.aud2repr2pose.plugin:Aud2Motion",
+    "aud2repr2pose": "evalsuite.generators.aud2repr2pose.plugin:Aud2Repr2Pose",
     # published models
     "aud2repr2pose-demo": "evalsuite.generators.aud2repr2pose_demo.plugin:Aud2Repr2PoseDemoGenerator",
     # adapters

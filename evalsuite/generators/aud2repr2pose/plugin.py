@@ -1,0 +1,187 @@
+"""``aud2pose``, ``aud2motion``, ``aud2repr2pose``: re-implementations of "Moving fast and slow" (Kucherenko et
+al., IVA 2019 / IJHCI 2021) as trainable plug-ins.
+
+26 MFCC at 20 fps (``mfcc_kucherenko``) -> three dense layers -> a GRU -> the pose (Aud2Pose, with the velocity
+as a second target), the pose sequence (Aud2Motion, causal GRU over 100-frame chunks), or the bottleneck code
+of a denoising motion autoencoder learned first and decoded by its decoder (Aud2Repr2Pose). The paper's
+post-processing (moving average, 1-euro) applies to the output with ``evalsuite generate --post``.
+"""
+from __future__ import annotations
+
+import pathlib
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from evalsuite.corpus.types import Corpus
+from evalsuite.generators.contract import (
+    GenerationRequest,
+    GenerationResult,
+    Generator,
+    GeneratorError,
+    GeneratorSpec,
+    TrainingResult,
+)
+from evalsuite.generators.pose_repr import PoseRepresentation
+from evalsuite.generators.reimpl import (
+    budget_seconds,
+    corpus_arrays,
+    load_state,
+    read_json,
+    request_arrays,
+    save_state,
+    splits_for_training,
+    torch_setup,
+    write_json,
+)
+
+__all__ = ["Aud2Pose", "Aud2Motion", "Aud2Repr2Pose"]
+
+CITATION = ("Kucherenko, Hasegawa, Kaneko, Henter, Kjellström (2021). Moving fast and slow: analysis of "
+            "representations and post-processing in speech-driven automatic gesture generation. IJHCI 37(14); "
+            "and Kucherenko et al. (2019). Analyzing input and output representations for speech-driven gesture "
+            "generation. IVA 2019.")
+OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-frame chunk) or windowed (the paper's "
+                   "61-frame window per output frame)",
+           "representation": "expmap (default: joint rotations, BVH, as the GENEA 2020 BA baseline) or positions "
+                             "(hip-centred joint positions, as the IVA'19 paper)",
+           "features": "mfcc (default: 26 MFCC, mfcc_kucherenko) or mfcc+prosody (MFCC + pitch and energy)",
+           "width": "units of the dense and GRU layers (default 128; paper 256)",
+           "code_dim": "aud2repr2pose: size of the motion representation (default 40, as GENEA 2020 BA)",
+           "epochs": "epochs of the speech network (default 60)", "dae_epochs": "autoencoder epochs (default 20)",
+           "batch_size": "windows or chunks per batch (default 64 chunks / 2056 windows)",
+           "learning_rate": "Adam (default 1e-3, the paper's)", "threads": "torch threads (default 1)"}
+DEVIATIONS = ("The speech network runs in the sequence-level form by default (one bidirectional GRU pass per "
+              "100-frame chunk instead of one 61-frame window per output frame: ~60x less computation on a CPU); "
+              "form=windowed is the paper's.",
+              "Layers are 128 units wide by default (paper: 256).",
+              "Motion: joint rotations (exponential maps) of the GENEA 2020 upper body of the corpus's skeleton by "
+              "default, or hip-centred joint positions; the paper used 64 joint positions + velocities of a "
+              "Japanese corpus.")
+
+
+class _Aud2(Generator):
+    system: ClassVar[str]
+
+    def _settings(self) -> dict[str, Any]:
+        form = str(self.option("form", "sequence"))
+        rep = str(self.option("representation", "expmap"))
+        feats = str(self.option("features", "mfcc"))
+        for name, value, allowed in (("form", form, ("sequence", "windowed")),
+                                     ("representation", rep, ("expmap", "positions")),
+                                     ("features", feats, ("mfcc", "mfcc+prosody"))):
+            if value not in allowed:
+                raise GeneratorError(f"{name} must be one of {', '.join(allowed)}, got {value!r}", field=name)
+        windowed = form == "windowed"
+        return {"form": form, "representation": rep, "features": feats,
+                "width": int(self.option("width", 128)), "code_dim": int(self.option("code_dim", 40)),
+                "epochs": int(self.option("epochs", 60)), "dae_epochs": int(self.option("dae_epochs", 20)),
+                "batch_size": int(self.option("batch_size", 2056 if windowed else 64)),
+                "learning_rate": float(self.option("learning_rate", 1e-3)), "threads": int(self.option("threads", 1))}
+
+    def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
+            progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
+        from evalsuite.generators.aud2repr2pose.training import SYSTEMS, train_system
+
+        st = self._settings()
+        torch_setup(seed, st["threads"])
+        train, val = splits_for_training(corpus)
+        rep = PoseRepresentation.from_motion(train[0].load_motion(), st["representation"])
+        recipe = "mfcc_kucherenko"
+        prosody = st["features"] == "mfcc+prosody"
+        tr = corpus_arrays(train, rep, audio_recipe=recipe, words=None)
+        va = corpus_arrays(val, rep, audio_recipe=recipe, words=None) if val else []
+        speech = [self._prosody(a.speech, seg.audio, rep.fps) if prosody else a.speech for a, seg in zip(tr, train)]
+        vspeech = [self._prosody(a.speech, seg.audio, rep.fps) if prosody else a.speech for a, seg in zip(va, val)]
+        _, overrides = SYSTEMS[self.system]
+        model = train_system(self.system, speech, [a.poses for a in tr],
+                             config={**overrides, "form": st["form"], "width": st["width"]},
+                             code_dim=st["code_dim"], dae_epochs=st["dae_epochs"], epochs=st["epochs"],
+                             batch_size=st["batch_size"], learning_rate=st["learning_rate"], seed=seed,
+                             val_speech=vspeech, val_poses=[a.poses for a in va],
+                             budget_seconds=budget_seconds(budget_minutes), on_epoch=progress)
+        rep.save(out_dir)
+        sha = save_state(out_dir, "speech_net.pt", model.speech_net)
+        if model.dae is not None:
+            save_state(out_dir, "motion_dae.pt", model.dae)
+        np.savez(out_dir / "normalisers.npz", speech_mean=model.speech_norm.mean, speech_std=model.speech_norm.std,
+                 pose_scale=model.pose_norm.scale, pose_mean=model.pose_norm.mean)
+        write_json(out_dir / "settings.json", {**st, "system": self.system, "audio_recipe": recipe,
+                                               "net": model.speech_net.config.to_dict(),
+                                               "pose_dim": rep.dim})
+        return TrainingResult(out_dir, model.history, {"weights_sha256": sha, "train_segments": len(tr)})
+
+    @staticmethod
+    def _prosody(mfcc: np.ndarray, audio: Any, fps: float) -> np.ndarray:
+        from evalsuite.features import extract
+
+        n = len(mfcc)
+        extra = np.concatenate([extract("pitch", audio, fps=fps, n_frames=n),
+                                extract("energy", audio, fps=fps, n_frames=n)], axis=1)
+        return np.concatenate([mfcc, extra], axis=1).astype(np.float32)
+
+    def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
+        super().load(config, model_dir)
+        from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
+        from evalsuite.generators.aud2repr2pose.training import MaxAbsScaler, Standardiser, TrainedSystem
+
+        assert model_dir is not None
+        saved = read_json(model_dir / "settings.json")
+        if saved.get("system") != self.system:
+            raise GeneratorError(f"this model folder holds a {saved.get('system')} model, not {self.system}",
+                                 field="--model")
+        torch_setup(0, int(saved.get("threads", 1)))
+        self.saved = saved
+        self.rep = PoseRepresentation.load(model_dir)
+        net = SpeechNet(SpeechNetConfig(**saved["net"]))
+        load_state(model_dir, "speech_net.pt", net)
+        dae = None
+        if (model_dir / "motion_dae.pt").is_file():
+            dae = MotionDAE(saved["pose_dim"], saved["code_dim"])
+            load_state(model_dir, "motion_dae.pt", dae)
+        norms = np.load(model_dir / "normalisers.npz")
+        self.model = TrainedSystem(self.system, net, Standardiser(norms["speech_mean"], norms["speech_std"]),
+                                   MaxAbsScaler(norms["pose_mean"], norms["pose_scale"]), dae)
+
+    def generate(self, request: GenerationRequest) -> GenerationResult:
+        from evalsuite.generators.aud2repr2pose.training import generate
+
+        arrays = request_arrays(request, self.rep.fps, audio_recipe=self.saved["audio_recipe"], words=None,
+                                name=self.spec.name)
+        speech = arrays.speech
+        if self.saved["features"] == "mfcc+prosody":
+            speech = self._prosody(speech, request.audio, self.rep.fps)
+        return GenerationResult(self.rep.decode(generate(self.model, speech)))
+
+    def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
+        return [self.generate(r) for r in requests]
+
+
+def _spec(name: str, summary: str) -> GeneratorSpec:
+    return GeneratorSpec(name=name, version="1", kind="re-implementation", summary=summary, citation=CITATION,
+                         license="MIT (this re-implementation; the original code is Apache-2.0 and is not used)",
+                         audio="required", native_fps=20.0, output="any", units="cm", trainable=True,
+                         needs_model=True, extra="learned",
+                         skeleton="the training corpus's skeleton (GENEA 2020 upper-body joints modelled)",
+                         config=OPTIONS, deviations=DEVIATIONS)
+
+
+class Aud2Pose(_Aud2):
+    system = "aud2pose"
+    spec = _spec("aud2pose", "Re-implementation of Aud2Pose (Hasegawa et al. 2018 as in 'Moving fast and slow'; "
+                             "not the published system): MFCC windows -> dense x3 -> bidirectional GRU -> pose "
+                             "(+ velocity target).")
+
+
+class Aud2Motion(_Aud2):
+    system = "aud2motion"
+    spec = _spec("aud2motion", "Re-implementation of Aud2Motion ('Moving fast and slow'; not the published "
+                               "system): MFCC sequence -> dense x3 -> causal GRU -> pose per frame.")
+
+
+class Aud2Repr2Pose(_Aud2):
+    system = "aud2repr2pose"
+    spec = _spec("aud2repr2pose", "Re-implementation of Aud2Repr2Pose ('Moving fast and slow'; not the published "
+                                  "system): a denoising motion autoencoder learned first, MFCC -> its code -> "
+                                  "its decoder.")

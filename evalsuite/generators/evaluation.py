@@ -1,0 +1,89 @@
+"""Learning criteria of the re-implemented generators, measured on a corpus's held-out split.
+
+:func:`evaluate_condition` reads a generated folder (``<segment>.bvh|.npz``) beside the corpus's natural motion
+and speech and returns, averaged over segments:
+
+* ``pose_mse`` -- mean squared error of the world positions of the GENEA 2020 upper-body joints present in
+  both (file units squared), natural resampled to the generated rate;
+* ``energy_speed_r`` -- the best Pearson correlation of speech energy with mean wrist speed within +-0.3 s
+  (:func:`evalsuite.metrics.coupling.energy_speed_correlation`);
+* ``lexical_<class>`` -- lexical contrast of the synthetic speaker's keyword classes
+  (:func:`evalsuite.metrics.coupling.lexical_contrasts`), and ``lexical_mean`` over the position classes
+  (up, wide, self, point).
+"""
+from __future__ import annotations
+
+import pathlib
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from evalsuite.corpus.types import Corpus, Segment
+from evalsuite.errors import InputError
+from evalsuite.metrics.coupling import (
+    SYNTH_CLASSES,
+    energy_speed_correlation,
+    joint_speed,
+    lexical_contrasts,
+    speech_energy,
+    wrist_indices,
+)
+from evalsuite.motion import Motion
+from evalsuite.motion.io import list_motion_files, load_motion
+from evalsuite.motion.ops import resample
+from evalsuite.motion.presets import GENEA2020_UPPER
+
+__all__ = ["evaluate_condition", "POSITION_CLASSES", "segment_scores"]
+
+POSITION_CLASSES = ("up", "wide", "self", "point")
+
+
+def _positions(m: Motion, names: Sequence[str]) -> np.ndarray:
+    return m.positions()[:, [m.joint_index(n) for n in names]]
+
+
+def segment_scores(gen: Motion, seg: Segment) -> dict[str, float]:
+    """The criteria for one generated motion of one corpus segment (see the module doc)."""
+    nat = resample(seg.load_motion(), gen.fps)
+    joints = [j for j in GENEA2020_UPPER if j in gen.joint_names and j in nat.joint_names]
+    if not joints:
+        raise InputError(f"segment {seg.id!r}: no GENEA 2020 upper-body joint in both motions")
+    n = min(gen.n_frames, nat.n_frames)
+    err = _positions(gen, joints)[:n] - _positions(nat, joints)[:n]
+    out = {"pose_mse": float((err ** 2).sum(axis=-1).mean())}
+    pos = gen.positions()
+    if seg.audio is not None:
+        x, rate = seg.load_audio()
+        energy = speech_energy(x.mean(axis=1), rate, gen.fps, gen.n_frames)
+        speed = joint_speed(pos[:, wrist_indices(gen.joint_names)], gen.fps)
+        out["energy_speed_r"] = energy_speed_correlation(energy, speed, gen.fps, 0.3)[0]
+    if seg.transcript is not None:
+        head = None
+        if gen.is_hierarchical and "Head" in gen.joint_names:
+            head = gen.world_rotations()[:, gen.joint_index("Head")]
+        words = [(w.text, w.start) for w in seg.transcript.words]
+        for cls, value in lexical_contrasts(words, pos, gen.joint_names, gen.fps, SYNTH_CLASSES,
+                                            head_rotations=head).items():
+            out[f"lexical_{cls}"] = value
+    return out
+
+
+def evaluate_condition(folder: str | pathlib.Path, corpus: Corpus, split: str = "test") -> dict[str, Any]:
+    """Mean of :func:`segment_scores` over the split's segments found in ``folder`` (NaNs ignored)."""
+    files = list_motion_files(folder)
+    rows = []
+    for seg in corpus.split(split):
+        path = files.get(seg.id) or files.get(f"{seg.id}_0")
+        if path is None:
+            raise InputError(f"no generated file for segment {seg.id!r}", path=folder)
+        rows.append(segment_scores(load_motion(path), seg))
+    keys = sorted({k for r in rows for k in r})
+    out: dict[str, Any] = {}
+    for k in keys:
+        vals = np.array([r.get(k, np.nan) for r in rows], dtype=np.float64)
+        out[k] = float(np.nanmean(vals)) if np.isfinite(vals).any() else float("nan")
+    classes = [out.get(f"lexical_{c}", np.nan) for c in POSITION_CLASSES]
+    out["lexical_mean"] = float(np.nanmean(classes)) if np.isfinite(classes).any() else float("nan")
+    out["segments"] = len(rows)
+    return out

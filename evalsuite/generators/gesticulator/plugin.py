@@ -1,0 +1,148 @@
+"""``gesticulator``: the re-implementation of Kucherenko et al. (ICMI 2020) as a trainable plug-in.
+
+Speech per 20-fps frame: Gesticulator's 64-band log-mel (``logmel_gesticulator``) and text (the word vector of
+the word spoken, plus the five timing features); a window of 10 past and 20 future frames; FiLM conditioning on
+the 3 previous poses; exponential maps of the GENEA 2020 upper-body joints, written as BVH on the corpus's
+skeleton. The paper's loss and teacher-forcing schedule (compressed to the epochs given). Ablations as the
+paper's Table 2: ``inputs=audio`` / ``inputs=text``, ``autoregressive=false``, ``film=false``.
+"""
+from __future__ import annotations
+
+import pathlib
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from evalsuite.corpus.types import Corpus
+from evalsuite.generators.contract import (
+    GenerationRequest,
+    GenerationResult,
+    Generator,
+    GeneratorError,
+    GeneratorSpec,
+    TrainingResult,
+)
+from evalsuite.generators.pose_repr import PoseRepresentation
+from evalsuite.generators.reimpl import (
+    TEXT_OPTION,
+    budget_seconds,
+    corpus_arrays,
+    load_state,
+    read_json,
+    request_arrays,
+    save_state,
+    splits_for_training,
+    torch_setup,
+    write_json,
+)
+
+__all__ = ["Gesticulator"]
+
+AUDIO_RECIPE = "logmel_gesticulator"
+# sizes: the paper's (124 / 612, 256 / FiLM 512) and a CPU preset
+SIZES: dict[str, dict[str, Any]] = {"paper": {"frame_dim": 124, "hidden": (612, 256), "film_dim": 512},
+         "cpu": {"frame_dim": 32, "hidden": (256, 128), "film_dim": 256}}
+
+
+class Gesticulator(Generator):
+    spec = GeneratorSpec(
+        name="gesticulator", version="1", kind="re-implementation",
+        summary="Re-implementation of Gesticulator (not the published system): log-mel + word vectors and timing "
+                "features -> FiLM autoregressive network -> joint rotations at 20 fps, trained on CPU.",
+        citation="Kucherenko, Jonell, van Waveren, Henter, Alexanderson, Leite, Kjellström (2020). Gesticulator: "
+                 "A framework for semantically-aware speech-driven gesture generation. ICMI 2020.",
+        license="MIT (this re-implementation; the original code is GPL-3 and is not used)",
+        audio="required", transcript="required", word_timings="estimated", native_fps=20.0, output="bvh",
+        skeleton="the training corpus's skeleton (GENEA 2020 upper-body joints modelled)", units="cm",
+        trainable=True, needs_model=True, extra="learned, text",
+        config={"words": TEXT_OPTION, "inputs": "audio+text (default), audio or text (the paper's ablations)",
+                "autoregressive": "true (default); false: the paper's 'no autoregression' ablation",
+                "film": "true (default); false: concatenation instead of FiLM (ablation)",
+                "size": "cpu (default) or paper (124 / 612, 256 / 512 units)",
+                "epochs": "epochs of the compressed schedule (default 40)", "threads": "torch threads (default 1)",
+                "batch_size": "sequences per batch (default 64)", "learning_rate": "Adam (default 1e-3; paper 1e-4)"},
+        deviations=(
+            "Text: word vectors from all-MiniLM-L6-v2 (384-d, offline from the text extra) or another local model "
+            "instead of BERT-base-cased (768-d) fetched from a hub; the five timing features as the original.",
+            "Sizes: the CPU preset has 32-unit frame encodings and 256/128 hidden units (paper: 124, 612/256).",
+            "Schedule: the paper's stages (pretraining without autoregression, teacher forcing every 16/8/4 "
+            "frames, then free) compressed into the given epochs; Adam 1e-3 instead of 1e-4 for short budgets.",
+            "No mirroring augmentation; motion hip-centric with the non-modelled joints held at the first "
+            "training frame (as the original's PyMO pipeline)."))
+
+    # -- training ------------------------------------------------------------------------------------------
+    def _settings(self) -> dict[str, Any]:
+        inputs = str(self.option("inputs", "audio+text"))
+        if inputs not in ("audio+text", "audio", "text"):
+            raise GeneratorError(f"inputs must be audio+text, audio or text, got {inputs!r}", field="inputs")
+        size = str(self.option("size", "cpu"))
+        if size not in SIZES:
+            raise GeneratorError(f"size must be one of {', '.join(SIZES)}, got {size!r}", field="size")
+        return {"inputs": inputs, "size": size, "words": str(self.option("words", "minilm")),
+                "autoregressive": bool(self.option("autoregressive", True)), "film": bool(self.option("film", True)),
+                "epochs": int(self.option("epochs", 40)), "threads": int(self.option("threads", 1)),
+                "batch_size": int(self.option("batch_size", 64)),
+                "learning_rate": float(self.option("learning_rate", 1e-3))}
+
+    def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
+            progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
+        from dataclasses import replace
+
+        from evalsuite.generators.gesticulator.net import GesticulatorConfig
+        from evalsuite.generators.gesticulator.training import budgeted_schedule, train_gesticulator
+
+        st = self._settings()
+        torch = torch_setup(seed, st["threads"])
+        train, val = splits_for_training(corpus)
+        rep = PoseRepresentation.from_motion(train[0].load_motion(), "expmap")
+        tr = corpus_arrays(train, rep, audio_recipe=AUDIO_RECIPE, words=st["words"])
+        va = corpus_arrays(val, rep, audio_recipe=AUDIO_RECIPE, words=st["words"]) if val else []
+        audio_dim, text_dim = tr[0].audio.shape[1], tr[0].text.shape[1]  # type: ignore[union-attr]
+        config = GesticulatorConfig(audio_dim=audio_dim, text_dim=text_dim, pose_dim=rep.dim,
+                                    use_audio="audio" in st["inputs"], use_text="text" in st["inputs"],
+                                    autoregressive=st["autoregressive"], film=st["film"], **SIZES[st["size"]])
+        schedule = replace(budgeted_schedule(st["epochs"]), batch_size=st["batch_size"],
+                           learning_rate=st["learning_rate"])
+        model = train_gesticulator([a.speech for a in tr], [a.poses for a in tr], config, schedule,
+                                   seed=seed, val_speech=[a.speech for a in va],
+                                   val_poses=[a.poses for a in va], budget_seconds=budget_seconds(budget_minutes),
+                                   on_epoch=progress)
+        rep.save(out_dir)
+        sha = save_state(out_dir, "gesticulator.pt", model.net)
+        np.savez(out_dir / "normalisers.npz", speech_mean=model.speech_norm.mean, speech_std=model.speech_norm.std,
+                 pose_mean=model.pose_norm.mean, pose_std=model.pose_norm.std)
+        write_json(out_dir / "settings.json", {**st, "net": config.to_dict(), "audio_recipe": AUDIO_RECIPE})
+        del torch
+        return TrainingResult(out_dir, model.history, {"weights_sha256": sha, "train_segments": len(tr),
+                                                        "val_segments": len(va)})
+
+    # -- generation ----------------------------------------------------------------------------------------
+    def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
+        super().load(config, model_dir)
+        from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
+        from evalsuite.generators.gesticulator.training import Normaliser, TrainedGesticulator
+
+        assert model_dir is not None
+        saved = read_json(model_dir / "settings.json")
+        torch_setup(0, int(saved.get("threads", 1)))
+        self.saved = saved
+        self.rep = PoseRepresentation.load(model_dir)
+        net = GesticulatorNet(GesticulatorConfig.from_dict(saved["net"]))
+        load_state(model_dir, "gesticulator.pt", net)
+        norms = np.load(model_dir / "normalisers.npz")
+        self.model = TrainedGesticulator(net, Normaliser(norms["speech_mean"], norms["speech_std"]),
+                                         Normaliser(norms["pose_mean"], norms["pose_std"]), [])
+
+    def _speech(self, req: GenerationRequest) -> np.ndarray:
+        return request_arrays(req, self.rep.fps, audio_recipe=self.saved["audio_recipe"], words=self.saved["words"],
+                              name=self.spec.name).speech
+
+    def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
+        from evalsuite.generators.gesticulator.training import generate_poses
+
+        poses = generate_poses(self.model, [self._speech(r) for r in requests], initial_pose=self.model.pose_norm.mean)
+        return [GenerationResult(self.rep.decode(p)) for p in poses]
+
+    def generate(self, request: GenerationRequest) -> GenerationResult:
+        return self.generate_batch([request])[0]

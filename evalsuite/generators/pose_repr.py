@@ -1,0 +1,135 @@
+"""The pose representations the re-implemented generators learn, and the way back to a motion on the corpus's
+skeleton.
+
+* ``expmap`` (Gesticulator, GENEA 2020 BA, Gesture2Vec): exponential maps (rotation vectors, radians) of the
+  modelled joints' local rotations, ``(T, 3J)``. Decoding writes them into a template: the corpus's skeleton
+  with every other channel held at the first training frame (as the original PyMO pipelines hold the joints
+  they do not model) and the root at the template's position (hip-centric, as the originals).
+* ``rotmat`` (Gesture2Vec): the same rotations as flattened 3x3 matrices ``(T, 9J)``; decoding projects each
+  onto the nearest rotation (scipy's ``Rotation.from_matrix``) first.
+* ``positions`` (Aud2Repr2Pose IVA'19, Ferstl et al.): world positions of the modelled joints relative to the
+  root joint, ``(T, 3J)``, in the corpus's units; decoded as a positions motion with the joints' names and
+  their nearest modelled ancestors as parents, put back at the template's root position (hip-centric, as
+  the paper's second study).
+
+The representation resamples to its own frame rate (20 fps, as all four papers) on the way in. A model folder
+keeps it as ``representation.json`` plus ``template.bvh`` (one frame).
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from evalsuite.errors import InputError
+from evalsuite.motion import Motion
+from evalsuite.motion.io import load_motion, save_motion
+from evalsuite.motion.joint_rotations import rotation_joints, with_rotation_vectors
+from evalsuite.motion.ops import resample
+from evalsuite.motion.presets import GENEA2020_UPPER
+
+__all__ = ["PoseRepresentation", "KINDS"]
+
+KINDS = ("expmap", "rotmat", "positions")
+
+
+@dataclass
+class PoseRepresentation:
+    kind: str
+    joints: list[str]
+    fps: float
+    template: Motion      # one frame of the corpus's skeleton (hierarchical)
+
+    @classmethod
+    def from_motion(cls, motion: Motion, kind: str = "expmap", joints: list[str] | None = None,
+                    fps: float = 20.0) -> PoseRepresentation:
+        """A representation of the joints (default: the GENEA 2020 upper body present in the motion) of the
+        motion's skeleton; its first frame is the template."""
+        if kind not in KINDS:
+            raise InputError(f"unknown pose representation {kind!r}; expected one of {', '.join(KINDS)}")
+        if not motion.is_hierarchical:
+            raise InputError("the re-implemented generators learn from BVH motion (joint rotations); this motion "
+                             "holds positions only", path=motion.source)
+        rotating = {motion.joint_names[j] for j, _, _ in rotation_joints(motion)}
+        wanted = joints or GENEA2020_UPPER
+        chosen = [j for j in wanted if j in rotating]
+        if len(chosen) < 3:
+            raise InputError(f"the skeleton has too few of the joints {', '.join(wanted[:6])}… with rotation "
+                             f"channels ({len(chosen)}); name the joints to model", path=motion.source)
+        return cls(kind, chosen, float(fps), motion.with_values(motion.values[:1].copy()))
+
+    # -- encoding ----------------------------------------------------------------------------------------
+    @property
+    def dim(self) -> int:
+        return (9 if self.kind == "rotmat" else 3) * len(self.joints)
+
+    def _rows(self, motion: Motion) -> list[list[int]]:
+        cols = {motion.joint_names[j]: c for j, c, _ in rotation_joints(motion)}
+        missing = [j for j in self.joints if j not in cols]
+        if missing:
+            raise InputError(f"the motion lacks the modelled joint(s) {', '.join(missing)}", path=motion.source)
+        return [cols[j] for j in self.joints]
+
+    def encode(self, motion: Motion) -> np.ndarray:
+        """``(T, 3J)`` float32 at :attr:`fps` (the motion is resampled first when its rate differs)."""
+        m = resample(motion, self.fps)
+        if self.kind == "positions":
+            idx = [m.joint_index(j) for j in self.joints]
+            root = m.skeleton.roots[0]
+            pos = m.positions()
+            rel = pos[:, idx] - pos[:, root:root + 1]
+            return rel.reshape(len(rel), -1).astype(np.float32)
+        from scipy.spatial.transform import Rotation
+
+        axes = {m.joint_names[j]: a for j, _, a in rotation_joints(m)}
+        rots = [Rotation.from_euler(axes[j].upper(), m.values[:, cols], degrees=True)
+                for j, cols in zip(self.joints, self._rows(m))]
+        out = [r.as_matrix().reshape(len(m.values), 9) if self.kind == "rotmat" else r.as_rotvec() for r in rots]
+        return np.concatenate(out, axis=1).astype(np.float32)
+
+    def decode(self, data: np.ndarray) -> Motion:
+        """``(T, 3J)`` at :attr:`fps` -> a motion (BVH on the template for ``expmap``, positions otherwise)."""
+        x = np.asarray(data, dtype=np.float64)
+        if x.ndim != 2 or x.shape[1] != self.dim:
+            raise InputError(f"poses of shape {x.shape} do not fit this representation ({self.dim} values per frame)")
+        t = self.template
+        if self.kind == "positions":
+            names = self.joints
+            parents = []
+            for j in names:
+                p = t.skeleton.parents[t.joint_index(j)]
+                while p >= 0 and t.joint_names[p] not in names:
+                    p = t.skeleton.parents[p]
+                parents.append(names.index(t.joint_names[p]) if p >= 0 else -1)
+            root = t.positions()[0, t.skeleton.roots[0]]
+            return Motion.from_positions(x.reshape(len(x), -1, 3) + root, names, self.fps, parents)
+        if self.kind == "rotmat":
+            from scipy.spatial.transform import Rotation
+
+            x = Rotation.from_matrix(x.reshape(-1, 3, 3)).as_rotvec().reshape(len(x), -1)
+        base = np.repeat(t.values[:1], len(x), axis=0)
+        full = t.with_values(base, fps=self.fps)
+        from evalsuite.motion.joint_rotations import rotation_vectors
+
+        rv = rotation_vectors(full)
+        order = [t.joint_names[j] for j, _, _ in rotation_joints(t)]
+        for k, j in enumerate(self.joints):
+            rv[:, order.index(j)] = x[:, 3 * k:3 * k + 3]
+        return with_rotation_vectors(full, rv)
+
+    # -- files ---------------------------------------------------------------------------------------------
+    def save(self, folder: pathlib.Path) -> None:
+        (folder / "representation.json").write_text(json.dumps(
+            {"kind": self.kind, "joints": self.joints, "fps": self.fps}, indent=1), encoding="utf-8")
+        save_motion(self.template, folder / "template.bvh")
+
+    @classmethod
+    def load(cls, folder: pathlib.Path) -> PoseRepresentation:
+        try:
+            meta = json.loads((folder / "representation.json").read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise InputError(f"not a model folder of a re-implemented generator ({exc})", path=folder,
+                             field="--model") from None
+        return cls(meta["kind"], list(meta["joints"]), float(meta["fps"]), load_motion(folder / "template.bvh"))
