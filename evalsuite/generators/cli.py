@@ -173,6 +173,10 @@ def generate_command(name: str, corpus: str | None, split: str, segments: tuple[
     if (corpus is None) == (audio is None):
         raise InputError("give either --corpus DIR or --audio FILE.wav", field="--corpus/--audio")
     extra: dict[str, Any] = {}
+    config = read_config(config_file, settings)
+    assert entry.spec is not None
+    if corpus is not None and "corpus" in entry.spec.config:
+        config.setdefault("corpus", str(pathlib.Path(corpus).resolve()))  # generators that read the corpus itself
     if corpus is not None:
         corp = _load_corpus(corpus)
         requests = requests_from_corpus(corp, split.split(","), fps, segments=segments or None)
@@ -185,7 +189,7 @@ def generate_command(name: str, corpus: str | None, split: str, segments: tuple[
             words = read_transcript(transcript)
         requests = [request_for_audio(audio, fps, words)]  # type: ignore[arg-type]
         extra["audio"] = audio
-    run = generate(entry, requests, out, config=read_config(config_file, settings), model_dir=model, seed=seed,
+    run = generate(entry, requests, out, config=config, model_dir=model, seed=seed,
                    samples=samples, post=_post(post), jobs=jobs, dask_address=dask_address,
                    check_determinism=not no_determinism_check, extra_record=extra, echo=click.echo)
     if run.cached:

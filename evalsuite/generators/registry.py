@@ -35,6 +35,7 @@ BUILTIN: dict[str, str] = {
     "fluctuation": "evalsuite.generators.conditions.degradations:Fluctuation",
     "fixing": "evalsuite.generators.conditions.degradations:Fixing",
     "smoothed": "evalsuite.generators.conditions.degradations:Smoothed",
+    "oracle": "evalsuite.generators.conditions.oracle:Oracle",
     # re-implementations of the seed papers (trainable on a CPU)
     "gesticulator": "evalsuite.generators.gesticulator.plugin:Gesticulator",
     "aud2pose": "evalsuite.generators.aud2repr2pose.plugin:Aud2Pose",

@@ -52,7 +52,7 @@ def segment_oracle(corpus: Corpus | str | pathlib.Path, segment_id: str, seed: i
     assert transcript is not None
     emphasised = set(seg.meta.get("emphasis") or meta["segments"][segment_id]["emphasis"])
     flags = [i in emphasised for i in range(len(transcript))]
-    s = int(seg.meta["motion_seed"]) if seed is None else int(seed)
+    s = int(seg.meta.get("motion_seed", meta["segments"][segment_id]["motion_seed"])) if seed is None else int(seed)
     duration = float(meta["segments"][segment_id]["n_frames"]) / p.fps
     onsets = meta["segments"][segment_id].get("onsets")
     return oracle_motion(transcript, duration, s, flags, p, name=segment_id, onsets=onsets)

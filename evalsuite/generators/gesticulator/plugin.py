@@ -61,7 +61,9 @@ class Gesticulator(Generator):
                 "film": "true (default); false: concatenation instead of FiLM (ablation)",
                 "size": "cpu (default) or paper (124 / 612, 256 / 512 units)",
                 "epochs": "epochs of the compressed schedule (default 40)", "threads": "torch threads (default 1)",
-                "batch_size": "sequences per batch (default 64)", "learning_rate": "Adam (default 1e-3; paper 1e-4)"},
+                "batch_size": "sequences per batch (default 64)", "learning_rate": "Adam (default 1e-3; paper 1e-4)",
+                "zero_audio": "at generation: replace the audio features by their training mean (shows what the "
+                              "text path alone does)"},
         deviations=(
             "Text: word vectors from all-MiniLM-L6-v2 (384-d, offline from the text extra) or another local model "
             "instead of BERT-base-cased (768-d) fetched from a hub; the five timing features as the original.",
@@ -135,8 +137,12 @@ class Gesticulator(Generator):
                                          Normaliser(norms["pose_mean"], norms["pose_std"]), [])
 
     def _speech(self, req: GenerationRequest) -> np.ndarray:
-        return request_arrays(req, self.rep.fps, audio_recipe=self.saved["audio_recipe"], words=self.saved["words"],
-                              name=self.spec.name).speech
+        speech = request_arrays(req, self.rep.fps, audio_recipe=self.saved["audio_recipe"], words=self.saved["words"],
+                                name=self.spec.name).speech
+        if self.option("zero_audio"):  # the training mean: zero after standardisation
+            a = int(self.saved["net"]["audio_dim"])
+            speech[:, :a] = self.model.speech_norm.mean[:a]
+        return speech
 
     def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
         from evalsuite.generators.gesticulator.training import generate_poses
