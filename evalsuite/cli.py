@@ -24,6 +24,7 @@ COMMANDS = {
     "render": "renderers.cli:render",
     "study": "study_app.cli:study",
     "analyze": "evalsuite.analysis.cli:analyze",
+    "correlate": "evalsuite.analysis.correlate_cli:correlate",
 }
 
 

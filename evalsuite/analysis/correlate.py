@@ -247,6 +247,6 @@ def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, see
                 if bad:
                     notes.append(f"{bad} of {n_boot} participant resamples without a correlation, left out")
     if better == "closer to natural" and math.isfinite(row["spearman_rho"]):
-        notes.append("closer-to-natural metric: the sign of rho does not say whether it agrees")
+        notes.append("closer to natural is better: no expected sign")
     row["note"] = "; ".join(notes)
     return row

@@ -41,6 +41,7 @@ class ParticipantResampler:
         self.data = data[keep]
         self.suffix = mismatch_suffix
         self.prior = prior
+        self._cache: dict = {}
 
     @classmethod
     def from_results(cls, path, *, study=None, attention_fails: int = 2, keep_incomplete: bool = False,
@@ -143,13 +144,18 @@ class ParticipantResampler:
         return fn(np.ones((1, P)))[0]
 
     def replicates(self, source: str, question: str, measure: str, conditions, n_boot: int, seed: int):
-        """``(n_boot, len(conditions))`` measures on participant resamples, or None when not computable."""
-        m = self._measure(source, question, measure, conditions)
-        if m is None:
-            return None
-        P, fn = m
-        counts = np.random.default_rng(seed).multinomial(P, np.full(P, 1 / P), size=n_boot).astype(float)
-        return fn(counts)
+        """``(n_boot, len(conditions))`` measures on participant resamples, or None when not computable
+        (cached: every metric is correlated with the same resamples)."""
+        key = (source, question, measure, tuple(conditions), n_boot, seed)
+        if key not in self._cache:
+            m = self._measure(source, question, measure, conditions)
+            if m is None:
+                self._cache[key] = None
+            else:
+                P, fn = m
+                counts = np.random.default_rng(seed).multinomial(P, np.full(P, 1 / P), size=n_boot).astype(float)
+                self._cache[key] = fn(counts)
+        return self._cache[key]
 
 
 def _ratio(num, den):

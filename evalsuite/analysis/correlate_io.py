@@ -124,7 +124,8 @@ def read_scores(path, metric: str | None = None) -> pd.DataFrame:
     """Metric values: long table ``condition, metric, value, better, line`` (see the module docstring)."""
     df = _read_csv(path, SCORES_EXPECTED)
     _require(df, ("condition", "value"), path, SCORES_EXPECTED)
-    if "metric" not in df.columns:
+    plain = "metric" not in df.columns
+    if plain:
         df["metric"] = metric or pathlib.Path(path).stem
     elif metric:
         df = df[df["metric"] == metric]
@@ -140,7 +141,7 @@ def read_scores(path, metric: str | None = None) -> pd.DataFrame:
                         "value": _numbers(df, "value", path),
                         "better": df["better"] if "better" in df.columns else "", "line": df["line"]})
     out = out.reset_index(drop=True)
-    out.attrs.update(path=str(path), source="scores")
+    out.attrs.update(path=str(path), source="scores", plain=plain)
     return out
 
 
