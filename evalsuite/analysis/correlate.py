@@ -127,6 +127,14 @@ def _agrees(rho: float, better: str, human_higher: bool):
     return bool(rho * expected > 0)
 
 
+def _snap(row: dict, est: str, lo: str, hi: str, tol: float = 1e-12) -> None:
+    """Bounds that differ from scipy's estimate by floating-point rounding only (e.g. 1.0 vs
+    0.9999999999999999 for a perfect correlation) are moved onto it."""
+    for key, pick in ((lo, min), (hi, max)):
+        if math.isfinite(row[key]) and abs(row[key] - row[est]) < tol:
+            row[key] = pick(row[key], row[est])
+
+
 def _label(path) -> str:
     return f" ({path})" if path else ""
 
@@ -233,6 +241,8 @@ def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, see
         if n_boot > 0:
             lo, hi, tlo, thi, bad = condition_bootstrap(x, y, n_boot, seed, alpha)
             row.update(spearman_ci_low=lo, spearman_ci_high=hi, kendall_ci_low=tlo, kendall_ci_high=thi)
+            _snap(row, "spearman_rho", "spearman_ci_low", "spearman_ci_high")
+            _snap(row, "kendall_tau_b", "kendall_ci_low", "kendall_ci_high")
             if bad:
                 notes.append(f"{bad} of {n_boot} condition resamples constant (no correlation), left out")
         if participants is not None and n_boot > 0:
@@ -243,6 +253,8 @@ def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, see
                 rr, tt = _replicates(np.broadcast_to(x, H.shape), H)
                 (row["spearman_ci_low_participants"], row["spearman_ci_high_participants"]) = _percentile(rr, alpha)
                 (row["kendall_ci_low_participants"], row["kendall_ci_high_participants"]) = _percentile(tt, alpha)
+                _snap(row, "spearman_rho", "spearman_ci_low_participants", "spearman_ci_high_participants")
+                _snap(row, "kendall_tau_b", "kendall_ci_low_participants", "kendall_ci_high_participants")
                 bad = int((~np.isfinite(rr)).sum())
                 if bad:
                     notes.append(f"{bad} of {n_boot} participant resamples without a correlation, left out")
