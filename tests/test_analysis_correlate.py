@@ -9,8 +9,7 @@ import pytest
 from click.testing import CliRunner
 from scipy import stats
 
-from evalsuite.analysis.correlate import (COLUMNS, correlate, kendall_b_rows, rank_correlations,
-                                          spearman_rows)
+from evalsuite.analysis.correlate import COLUMNS, correlate, kendall_b_rows, rank_correlations, spearman_rows
 from evalsuite.analysis.correlate_boot import ParticipantResampler
 from evalsuite.analysis.correlate_io import read_human, read_scores
 from evalsuite.analysis.demo import sample_results_path
@@ -327,7 +326,10 @@ def test_cli_published_numbers_and_help(tmp_path):
 
 def test_analyze_scores_adds_the_report_section(real, tmp_path):
     out = tmp_path / "report"
-    r = invoke("analyze", SAMPLE, "-o", out, "--bootstrap", "100", "--scores", real / "scores" / "summary.csv")
+    summary = pd.read_csv(real / "scores" / "summary.csv", keep_default_na=False)
+    few = tmp_path / "summary.csv"   # three of the metrics: fewer figures to draw
+    summary[summary.metric.isin(["ape", "speed", "cca"])].to_csv(few, index=False)
+    r = invoke("analyze", SAMPLE, "-o", out, "--bootstrap", "100", "--scores", few)
     assert r.exit_code == 0, r.output
     page = (out / "report.html").read_text()
     assert "<h2>Metrics vs humans</h2>" in page and "median (hl_rating)" in page and "elo (human_likeness)" in page
