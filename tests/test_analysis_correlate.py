@@ -105,6 +105,18 @@ def test_direction_and_agrees():
     assert flipped.loc["ape", "agrees"] is False
 
 
+def test_distance_to_natural_gives_closer_to_natural_metrics_a_sign():
+    conds = ["NA", "A", "B", "C"]
+    speed = scores_frame([10.0, 12.0, 4.0, 30.0], "speed", conds)      # |speed - NA| = 0, 2, 6, 20
+    human = human_frame([90.0, 70.0, 50.0, 20.0], conds)
+    t = correlate(speed, human, n_boot=0, natural="NA").set_index("metric")
+    d = t.loc["|speed - NA|"]
+    assert d.better == "lower" and d.spearman_rho == pytest.approx(-1.0) and d.agrees is True
+    assert t.loc["speed", "agrees"] is None
+    with pytest.raises(InputError, match="--natural 'natural': no such condition in the scores"):
+        correlate(speed, human, natural="natural")
+
+
 # --- bootstrap -------------------------------------------------------------------------------------
 
 def test_condition_bootstrap_is_seeded_and_contains_the_estimate():

@@ -32,7 +32,8 @@ from scipy import stats
 
 from evalsuite.errors import InputError
 
-__all__ = ["COLUMNS", "correlate", "rank_correlations", "spearman_rows", "kendall_b_rows", "metric_direction"]
+__all__ = ["COLUMNS", "correlate", "rank_correlations", "spearman_rows", "kendall_b_rows", "metric_direction",
+           "add_distance_to_natural"]
 
 COLUMNS = ["metric", "human_measure", "n", "spearman_rho", "spearman_p", "spearman_ci_low", "spearman_ci_high",
            "kendall_tau_b", "kendall_p", "kendall_ci_low", "kendall_ci_high", "question", "measure", "better",
@@ -156,7 +157,7 @@ def check_conditions(score_conds, human_conds, scores_path=None, human_path=None
 
 def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, seed: int = 42,
               alpha: float = 0.05, participants=None, shared_only: bool = False, human_higher: bool = True,
-              notes: list | None = None) -> pd.DataFrame:
+              notes: list | None = None, natural: str | None = None) -> pd.DataFrame:
     """The ``correlations.csv`` table: one row per metric and human measure (module docstring).
 
     ``scores``: columns ``condition, metric, value`` (optional ``better``); ``human``: columns
@@ -164,9 +165,11 @@ def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, 
     :func:`~evalsuite.analysis.correlate_io.read_human`). Conditions must be the same in both (an
     :class:`InputError` names those that are not) unless ``shared_only``; at least 3 must be shared.
     ``participants``: optional resampler for participant-bootstrap CIs. Notes about the inputs (left-out
-    conditions) are appended to ``notes`` when given.
+    conditions) are appended to ``notes`` when given. ``natural``: see :func:`add_distance_to_natural`.
     """
     scores, human = _normalise(scores, "scores"), _normalise(human, "human")
+    if natural:
+        scores = add_distance_to_natural(scores, natural)
     s_path, h_path = scores.attrs.get("path"), human.attrs.get("path")
     s_conds, h_conds = set(scores["condition"]), set(human["condition"])
     shared = sorted(s_conds & h_conds)
@@ -193,6 +196,28 @@ def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, 
                              n_boot=n_boot, seed=seed, alpha=alpha, participants=participants,
                              human_higher=human_higher, source=human.attrs.get("source", "")))
     return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def add_distance_to_natural(scores: pd.DataFrame, natural: str) -> pd.DataFrame:
+    """``scores`` plus, for every "closer to natural" metric ``m``, a metric ``|m - natural|`` (the
+    absolute difference from the natural condition's value; lower is better), so such metrics get an
+    expected sign too. ``natural``: the natural condition's name in ``scores``."""
+    scores = _normalise(scores, "scores")
+    if natural not in set(scores["condition"]):
+        raise InputError(f"--natural {natural!r}: no such condition in the scores; they have "
+                         f"{', '.join(sorted(set(scores['condition'])))}", path=scores.attrs.get("path"))
+    registry = _registry_directions()
+    extra = []
+    for metric, sg in scores.groupby("metric", sort=False):
+        fallback = str(sg["better"].iloc[0]) if "better" in sg.columns else ""
+        nat = sg.loc[sg["condition"] == natural, "value"]
+        if metric_direction(str(metric), registry, fallback) != "closer to natural" or nat.empty:
+            continue
+        extra.append(sg.assign(metric=f"|{metric} - {natural}|", value=(sg["value"] - float(nat.iloc[0])).abs(),
+                               better="lower"))
+    out = pd.concat([scores, *extra], ignore_index=True)
+    out.attrs.update(scores.attrs)
+    return out
 
 
 def _normalise(df: pd.DataFrame, what: str) -> pd.DataFrame:

@@ -75,11 +75,14 @@ def check_against_results(human, resampler, results_path) -> None:
               help="Correlate the conditions both inputs have instead of stopping on a difference.")
 @click.option("--human-lower-better", is_flag=True,
               help="The human values are better when lower (e.g. a rank in a plain CSV); sets 'agrees'.")
+@click.option("--natural", default=None, metavar="NAME",
+              help="The natural condition (as named in HUMAN): adds |metric - NAME| for every 'closer to natural' "
+                   "metric, which has an expected sign.")
 @click.option("--mismatch-suffix", default=":mismatched", show_default=True,
               help="X vs X + this suffix is a matched-vs-mismatched comparison: left out of win rates.")
 @click.option("--no-figures", is_flag=True, help="Tables only.")
 def correlate(scores, human, out_dir, measures, questions, metrics, results, n_boot, seed, alpha, renames, excluded,
-              shared_only, human_lower_better, mismatch_suffix, no_figures):
+              shared_only, human_lower_better, natural, mismatch_suffix, no_figures):
     """Correlate objective metrics (SCORES) with human judgements (HUMAN) across conditions.
 
     SCORES: summary.csv of `evalsuite score`, or a condition,metric,value or condition,value
@@ -96,6 +99,7 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
       evalsuite correlate scores/summary.csv analysis/ratings.csv --measure median \\
           --rename natural=NA --results results.csv -o correlations/
     """
+    from evalsuite.analysis.correlate import add_distance_to_natural
     from evalsuite.analysis.correlate import correlate as run
     from evalsuite.analysis.correlate_boot import ParticipantResampler
     from evalsuite.analysis.correlate_io import read_human, read_scores
@@ -122,6 +126,9 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
     if not dupes.empty:
         raise InputError(f"--rename makes two conditions {dupes['condition'].iloc[0]!r} for metric "
                          f"{dupes['metric'].iloc[0]!r}", path=scores)
+    if natural:  # before --exclude: the natural condition may be left out of the correlation
+        s.attrs.update(path=str(scores))
+        s = add_distance_to_natural(s, natural)
     drop = set(_names(excluded))
     unknown_drop = sorted(drop - set(s["condition"]) - set(h["condition"]))
     if unknown_drop:
