@@ -38,6 +38,10 @@ def _analysis_options(human: pathlib.Path) -> dict:
 def check_against_results(human, resampler, results_path) -> None:
     """InputError when the human table's values are not the ones recomputed from the results file."""
     source = human.attrs.get("source", "")
+    if source == "plain":
+        raise InputError("--results recomputes the measures of ratings.csv, likert_means.csv, elo.csv or "
+                         "pairwise.csv of `evalsuite analyze`, not of a plain condition,value file",
+                         path=human.attrs.get("path"))
     for (q, m), g in human.groupby(["question", "measure"], sort=False):
         point = resampler.point(source, q, m, list(g["condition"]))
         if point is None:

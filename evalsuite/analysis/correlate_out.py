@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from evalsuite.analysis import report
-from evalsuite.analysis.correlate import COLUMNS, correlate, human_label
+from evalsuite.analysis.correlate import COLUMNS, correlate
 from evalsuite.analysis.correlate_boot import ParticipantResampler
 from evalsuite.analysis.correlate_io import read_human, read_scores
 from evalsuite.errors import InputError
@@ -18,6 +18,7 @@ from evalsuite.errors import InputError
 __all__ = ["write_outputs", "display_table", "fig_scatter", "report_section"]
 
 _ARROW = {"lower": "↓", "higher": "↑", "closer to natural": "≈nat"}
+_TEX_WORD = {"lower": "(lower better)", "higher": "(higher better)", "closer to natural": "(closer to natural)"}
 
 
 def _num(v, fmt: str = ".3f") -> str:
@@ -34,13 +35,15 @@ def _ci(lo, hi) -> str:
     return report.DASH if not math.isfinite(float(lo)) else f"[{_num(lo, '.2f')}, {_num(hi, '.2f')}]"
 
 
-def display_table(table: pd.DataFrame, alpha: float = 0.05) -> pd.DataFrame:
-    """The compact table of the Markdown, LaTeX and HTML outputs (rounded; CSV keeps everything)."""
+def display_table(table: pd.DataFrame, alpha: float = 0.05, arrows: dict | None = None) -> pd.DataFrame:
+    """The compact table of the Markdown, LaTeX and HTML outputs (rounded; CSV keeps everything).
+    ``arrows``: how the metric's direction is shown after its name (default ↓, ↑, ≈nat)."""
+    arrows = _ARROW if arrows is None else arrows
     level = f"{100 * (1 - alpha):g}%"
     part = bool(np.isfinite(table["spearman_ci_low_participants"].astype(float)).any()) if len(table) else False
     rows = []
     for r in table.to_dict("records"):
-        d = {"metric": f"{r['metric']} {_ARROW.get(r['better'], '')}".strip(), "human measure": r["human_measure"],
+        d = {"metric": f"{r['metric']} {arrows.get(r['better'], '')}".strip(), "human measure": r["human_measure"],
              "n": str(r["n"]), "rho": _num(r["spearman_rho"]), "p (rho)": _p(r["spearman_p"]),
              f"rho {level} CI": _ci(r["spearman_ci_low"], r["spearman_ci_high"])}
         if part:
@@ -101,7 +104,9 @@ def write_outputs(table: pd.DataFrame, scores: pd.DataFrame, human: pd.DataFrame
     table[COLUMNS].to_csv(out_dir / "correlations.csv", index=False, na_rep="")
     shown = display_table(table, alpha)
     (out_dir / "correlations.md").write_text(report.to_markdown(shown), encoding="utf-8")
-    (out_dir / "correlations.tex").write_text(report.to_latex(shown), encoding="utf-8")
+    # pdfLaTeX has no arrows in text mode, and to_latex escapes math: the direction in words
+    (out_dir / "correlations.tex").write_text(report.to_latex(display_table(table, alpha, _TEX_WORD)),
+                                              encoding="utf-8")
     figs = []
     if figures and len(table):
         fig_dir = out_dir / "figures"
@@ -178,6 +183,3 @@ def report_section(scores_path, out_dir, data: pd.DataFrame, *, n_boot: int = 10
         parts.extend(report.html_figure(p, c) for p, c in figs)
     return "Metrics vs humans", parts
 
-
-def human_measures_text(human: pd.DataFrame) -> str:
-    return ", ".join(dict.fromkeys(human_label(q, m) for q, m in zip(human["question"], human["measure"])))
