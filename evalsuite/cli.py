@@ -31,6 +31,7 @@ COMMANDS = {
     "features": "evalsuite.features.cli:features",
     # temporary: joins the `corpus` group (evalsuite/corpus/cli.py) as `evalsuite corpus synth`
     "corpus-synth": "evalsuite.corpus.synth_cli:synth",
+    "correlate": "evalsuite.analysis.correlate_cli:correlate",
 }
 
 
