@@ -4,16 +4,16 @@ Given words with times and emphasis flags, a seed and :class:`MotionParams`, :fu
 
 1. **plans gesture units** (:func:`plan_gestures`): a keyword of a class (grammar.KEYWORD_CLASSES) gets its
    semantic gesture with probability ``semantic_p``, an emphasised ordinary word a beat with probability
-   ``beat_p``. The stroke of a unit ends ``lag`` after the word's onset; before it come the stroke
-   (``stroke_s``) and the preparation (``prep_s``); after it a hold (beats: ``beat_hold_s``; semantic: until
+   ``beat_p``. A beat's stroke (``beat_stroke_s``) ends ``lag`` after the word's onset, a semantic stroke
+   (``semantic_stroke_s``; a head shake: ``shake_cycles`` at ``shake_hz``) starts ``lag`` after it; before
+   the stroke comes the preparation (``prep_s``); after it a hold (beats: ``beat_hold_s``; semantic: until
    ``semantic_hold_s`` after the keyword's end) and, when the arm is free long enough, a retraction
-   (``retract_s``) to rest. Units are sequential: a unit whose stroke would start before the previous
-   unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head shake and
-   uses no arm.
+   (``retract_s``) to rest. Arm units are sequential: a unit whose stroke would start before the previous
+   unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head shake: it uses
+   no arm and never conflicts.
 2. **renders** the units as keyframe tracks of arm poses (body.POSES) with minimum-jerk transitions, adds
-   *batons* (while a word is spoken the hands circle at ``baton_hz`` with a radius of ``baton_deg`` x gain
-   x ``sin(pi s)^(1/2)`` over each syllable, lagged ``baton_lag_s``: wrist speed follows speech and stops at
-   syllable onsets), nods on emphasised words, head shakes, breathing and sway, and labels each frame with
+   *batons* (on each syllable the forearms flick up or down, alternately, to ``+-baton_deg/2`` x gain x
+   (syllable duration / 0.2 s), with a minimum-jerk profile, lagged ``baton_lag_s``: wrist speed follows speech and stops at syllable onsets), nods on emphasised words, head shakes, breathing and sway, and labels each frame with
    the phase, gesture kind and keyword of the unit it belongs to.
 
 Every random number is drawn in a fixed order whatever the switches, so the switches change only what
@@ -96,17 +96,18 @@ def plan_gestures(transcript: Transcript, emphasis: list[bool], params: MotionPa
         hands = "R" if u[6] < p.hands_p[0] else ("L" if u[6] < p.hands_p[0] + p.hands_p[1] else "RL")
         arms = {"wide": "RL", "negation": ""}.get(kind, hands)
         onset = w.start + p.offset_s
-        stroke_end = onset + lag
-        if kind == "negation":  # a head shake over the word: no arm
-            stroke_end = onset + lag + p.shake_cycles / p.shake_hz
-            stroke = p.shake_cycles / p.shake_hz
+        stroke_end = onset + lag            # a beat's stroke ends on the emphasised syllable
+        if kind != "beat":                  # a semantic stroke starts with its keyword (a shake: no arm)
+            stroke = p.shake_cycles / p.shake_hz if kind == "negation" else stroke
+            stroke_end = onset + lag + stroke
         hold = _uniform(u[4], p.beat_hold_s) if kind == "beat" else (
             w.end + p.offset_s + _uniform(u[4], p.semantic_hold_s) - stroke_end)
         units.append(Unit(kind, w.text, i, arms, stroke_end - stroke - _uniform(u[3], p.prep_s),
                           stroke_end - stroke, stroke_end, stroke_end + max(hold, 0.05),
                           _uniform(u[5], p.retract_s), _uniform(u[7], p.gesture_amplitude) * p.amplitude))
     kept: list[Unit] = []
-    for unit in units:
+    shakes = [u for u in units if u.kind == "negation"]      # the head is free: shakes never conflict
+    for unit in (u for u in units if u.kind != "negation"):
         while kept and unit.stroke_start < kept[-1].hold_end + 0.02:
             if unit.kind != "beat" and kept[-1].kind == "beat":
                 kept.pop()          # a semantic gesture wins over a beat
@@ -117,6 +118,8 @@ def plan_gestures(transcript: Transcript, emphasis: list[bool], params: MotionPa
         if kept:
             unit.prep_start = max(unit.prep_start, kept[-1].hold_end)
         kept.append(unit)
+    for unit in shakes:
+        unit.end = unit.hold_end
     for k, unit in enumerate(kept):
         nxt = kept[k + 1] if k + 1 < len(kept) else None
         free = (nxt.prep_start - unit.hold_end) if nxt is not None else np.inf
@@ -124,7 +127,7 @@ def plan_gestures(transcript: Transcript, emphasis: list[bool], params: MotionPa
         unit.end = unit.hold_end + unit.retract_s if unit.retracts else (nxt.prep_start if nxt else unit.hold_end)
         if nxt is not None and unit.retracts:
             unit.end = min(unit.end, nxt.prep_start)
-    return kept
+    return sorted(kept + shakes, key=lambda u: u.stroke_start)
 
 
 def _arm_tracks(units: list[Unit], params: MotionParams) -> dict[str, Track]:
@@ -212,26 +215,29 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
         vals = tr.sample(t)
         for c, (joint, ch) in enumerate(ARM_CHANNELS):
             values[:, channel_index(sk, side + joint, ch)] = vals[:, c]
-    # batons: while a word is spoken the hands circle (elbow flexion and arm abduction in quadrature at
-    # baton_hz) with an amplitude that rises and falls over the word, so wrist speed follows the speech;
+    # batons: on every syllable the forearms flick (elbow flexion, minimum-jerk, alternately up by
+    # baton_deg x gain and back), so wrist speed follows the speech and stops at syllable onsets;
     # nods on emphasised words
-    gate = np.zeros(n)
+    baton = Track(np.zeros(1))
     nod = np.zeros(n)
+    up = False
     if p.beats:
         for i, (w, emph) in enumerate(zip(transcript.words, flags)):
             gain = (p.emphasis_gain if emph else 1.0) * (0.7 + 0.6 * draws[i, 8])
             start = w.start + p.offset_s + p.baton_lag_s
             cuts = [0.0] + [o for o in syl[i] if p.min_syllable_s <= o <= w.duration - p.min_syllable_s]
             cuts.append(w.duration)
-            for a, b in zip(cuts[:-1], cuts[1:]):
-                gate += gain * np.sqrt(_bump(t, start + a, b - a))
+            baton.hold(start)
+            for a, c in zip(cuts[:-1], cuts[1:]):
+                up = not up
+                size = p.baton_deg * gain * min(1.5, (c - a) / 0.2)   # about the same speed on every syllable
+                baton.key(start + c, np.array([size / 2 if up else -size / 2]))
             if emph:
                 nod += p.nod_deg * _bump(t, start, 0.35)
-    gate *= p.baton_deg * p.amplitude
-    phase = 2 * np.pi * p.baton_hz * t
-    for side, sign, shift in (("Right", 1.0, 0.0), ("Left", -1.0, 0.6 * np.pi)):
-        values[:, channel_index(sk, side + "ForeArm", "Yrotation")] += sign * gate * np.sin(phase + shift)
-        values[:, channel_index(sk, side + "Arm", "Zrotation")] += 0.5 * sign * gate * np.cos(phase + shift)
+    flick = baton.sample(t)[:, 0] * p.amplitude
+    values[:, channel_index(sk, "RightForeArm", "Yrotation")] += flick
+    values[:, channel_index(sk, "LeftForeArm", "Yrotation")] -= 0.7 * flick
+    values[:, channel_index(sk, "RightHand", "Zrotation")] += flick
     values[:, channel_index(sk, "Neck", "Xrotation")] += p.amplitude * nod
     for unit in units:
         if unit.kind == "negation":
