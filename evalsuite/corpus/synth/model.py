@@ -158,13 +158,13 @@ def _labels(units: list[Unit], t: np.ndarray) -> FrameLabels:
     phase = np.full(n, "rest", dtype=object)
     kind = np.full(n, "none", dtype=object)
     keyword = np.full(n, "", dtype=object)
-    for unit in units:
+    for unit in sorted(units, key=lambda u: u.kind == "negation"):     # arm gestures first, then head shakes
         stops = ((unit.prep_start, "preparation"), (unit.stroke_start, "stroke"), (unit.stroke_end, "hold"),
                  (unit.hold_end, "retraction" if unit.retracts else "hold"), (unit.end, None))
         for (a, name), (b, _) in zip(stops[:-1], stops[1:]):
             sel = (t >= a) & (t < b)
-            if unit.kind == "negation":  # the head shake labels only frames the arms leave at rest
-                sel &= kind == "none"
+            if unit.kind == "negation":  # a head shake labels the frames where the arms rest or hold
+                sel &= (phase == "rest") | (phase == "hold")
             phase[sel], kind[sel], keyword[sel] = name, unit.kind, unit.keyword
     return FrameLabels(phase.astype(str), kind.astype(str), keyword.astype(str))
 
