@@ -32,7 +32,11 @@ def build_conditions(corpus_dir: pathlib.Path, out: pathlib.Path, offsets=(0.3, 
     for k, seg in enumerate(segs):
         nat = natural[seg.id]
         _write(folders["natural"], seg.id, nat)
-        _write(folders["oracle"], seg.id, segment_oracle(corpus, seg.id, seed=1000 + k)[0])
+        oracle, labels = segment_oracle(corpus, seg.id, seed=1000 + k)
+        _write(folders["oracle"], seg.id, oracle)
+        for name, text in (("natural", seg.labels.read_text()), ("oracle", labels.to_csv())):
+            (folders[name] / "labels").mkdir(exist_ok=True)
+            (folders[name] / "labels" / f"{seg.id}.csv").write_text(text)
         _write(folders["mean_pose"], seg.id, nat.with_values(np.tile(mean_values, (nat.n_frames, 1))))
         # the other segments' motion, one after another, cropped to this segment's length
         others = [natural[s.id].values for s in segs[k + 1:] + segs[:k]]

@@ -13,8 +13,9 @@ Given words with times and emphasis flags, a seed and :class:`MotionParams`, :fu
    no arm and never conflicts.
 2. **renders** the units as keyframe tracks of arm poses (body.POSES) with minimum-jerk transitions, adds
    *batons* (on each syllable the forearms flick up or down, alternately, to ``+-baton_deg/2`` x gain x
-   (syllable duration / 0.2 s), with a minimum-jerk profile, lagged ``baton_lag_s``: wrist speed follows speech and stops at syllable onsets), nods on emphasised words, head shakes, breathing and sway, and labels each frame with
-   the phase, gesture kind and keyword of the unit it belongs to.
+   min(1.5, syllable duration / 0.2 s), with a minimum-jerk profile, lagged ``baton_lag_s``: wrist speed
+   follows speech and stops at syllable onsets), nods on emphasised words, head shakes, breathing and sway,
+   and labels each frame with the phase, gesture kind and keyword of the unit it belongs to.
 
 Every random number is drawn in a fixed order whatever the switches, so the switches change only what
 they name: the same seed with ``offset_s=0.6`` is the same performance 0.6 s late.
@@ -225,13 +226,13 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
         for i, (w, emph) in enumerate(zip(transcript.words, flags)):
             gain = (p.emphasis_gain if emph else 1.0) * (0.7 + 0.6 * draws[i, 8])
             start = w.start + p.offset_s + p.baton_lag_s
-            cuts = [0.0] + [o for o in syl[i] if p.min_syllable_s <= o <= w.duration - p.min_syllable_s]
+            cuts = [0.0] + [float(o) for o in syl[i] if p.min_syllable_s <= o <= w.duration - p.min_syllable_s]
             cuts.append(w.duration)
             baton.hold(start)
-            for a, c in zip(cuts[:-1], cuts[1:]):
+            for a, b in zip(cuts[:-1], cuts[1:]):
                 up = not up
-                size = p.baton_deg * gain * min(1.5, (c - a) / 0.2)   # about the same speed on every syllable
-                baton.key(start + c, np.array([size / 2 if up else -size / 2]))
+                size = p.baton_deg * gain * min(1.5, (b - a) / 0.2)   # about the same speed on every syllable
+                baton.key(start + b, np.array([size / 2 if up else -size / 2]))
             if emph:
                 nod += p.nod_deg * _bump(t, start, 0.35)
     flick = baton.sample(t)[:, 0] * p.amplitude
