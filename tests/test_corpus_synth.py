@@ -55,20 +55,20 @@ def test_layout_files_and_corpus_json(corpus_dir):
     assert set(meta["keyword_classes"]) == {"up", "wide", "self", "point", "negation"}
     assert meta["model"]["params"]["baton_deg"] > 0 and meta["model"]["phases"] == list(PHASES)
     segs = meta["segments"]
-    assert len(segs) == 12                     # 2 minutes in segments of about 10 s
+    assert len(segs) == 16                     # 2 minutes in segments of 6.5-10.7 s (segment_s = 10)
     assert sorted(s for ids in meta["splits"].values() for s in ids) == sorted(segs)
     assert all(len(meta["splits"][k]) >= 1 for k in ("train", "val", "test"))
     for seg_id, info in segs.items():
         base = corpus_dir / {"train": "trn", "val": "val", "test": "tst"}[info["split"]] / "main-agent"
         for sub, ext in (("wav", "wav"), ("bvh", "bvh"), ("tsv", "tsv"), ("labels", "csv")):
             assert (base / sub / f"{seg_id}.{ext}").is_file()
-        assert 8.0 <= info["duration"] <= 30.0
+        assert 6.0 <= info["duration"] <= 12.0
     # sentences are disjoint across splits (and unique within the corpus)
     by_split = {k: {t for s in ids for t in segs[s]["sentences"]} for k, ids in meta["splits"].items()}
     assert not (by_split["train"] & by_split["val"]) and not (by_split["train"] & by_split["test"])
     assert not (by_split["val"] & by_split["test"])
     corpus = read_synth_corpus(corpus_dir)
-    assert len(corpus) == 12 and corpus.speakers == ("synth01",)
+    assert len(corpus) == 16 and corpus.speakers == ("synth01",)
     assert {s.split for s in corpus} == {"train", "val", "test"}
 
 
@@ -214,7 +214,7 @@ def test_command_writes_a_corpus_and_refuses_a_full_folder(tmp_path):
     res = runner.invoke(main, ["corpus-synth", "-o", str(out), "--minutes", "0.5", "--seed", "3",
                                "--segment-seconds", "10"])
     assert res.exit_code == 0, res.output
-    assert "Wrote 3 segments" in res.output
+    assert "Wrote 4 segments" in res.output
     assert load_motion(next(out.rglob("*.bvh"))).fps == 30.0
     res = runner.invoke(main, ["corpus-synth", "-o", str(out), "--minutes", "0.5", "--quiet"])
     assert res.exit_code == 1 and "not empty" in res.output

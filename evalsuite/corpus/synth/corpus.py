@@ -84,8 +84,9 @@ def _segment_audio(sentences: list[tuple[list[str], list[bool], list[int]]], ban
     flags: list[bool] = []
     texts: list[str] = []
     for k, (sent, emph, phrase_lens) in enumerate(sentences):
-        if k and pos / rate > layout.segment_s - 2.0:
-            break
+        spoken = sum(len(bank[(w, e)]) for w, e in zip(sent, emph)) / rate + 0.06 * len(sent) + 0.8
+        if k and pos / rate + spoken > layout.segment_s and pos / rate > 0.6 * layout.segment_s:
+            break           # the next sentence (with its pause) would not fit, and the segment is long enough
         if k:
             pause = _u(rng, layout.long_pause_s) if rng.random() < layout.long_pause_p else _u(rng, layout.sentence_pause_s)
             pieces.append(np.zeros(int(round(pause * rate)), dtype=np.int16))
@@ -129,7 +130,7 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
     root = pathlib.Path(out_dir)
     if root.exists() and any(root.iterdir()):
         raise InputError("the output folder exists and is not empty", path=root)
-    n_seg = max(3, int(round(minutes * 60.0 / layout.segment_s)))
+    n_seg = max(3, int(round(minutes * 60.0 / (layout.segment_s - 2.5))))   # segments average segment_s - 2.5 s
     splits = assign_splits(n_seg, np.random.default_rng([seed, 1]))
     text_rng = np.random.default_rng([seed, 0])
     used: set[str] = set()
