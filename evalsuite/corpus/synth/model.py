@@ -7,10 +7,11 @@ Given words with times and emphasis flags, a seed and :class:`MotionParams`, :fu
    ``beat_p``. A beat's stroke (``beat_stroke_s``) ends ``lag`` after the word's onset, a semantic stroke
    (``semantic_stroke_s``; a head shake: ``shake_cycles`` at ``shake_hz``) starts ``lag`` after it; before
    the stroke comes the preparation (``prep_s``); after it a hold (beats: ``beat_hold_s``; semantic: until
-   ``semantic_hold_s`` after the keyword's end) and, when the arm is free long enough, a retraction
-   (``retract_s``) to rest. Arm units are sequential: a unit whose stroke would start before the previous
-   unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head shake: it uses
-   no arm and never conflicts.
+   ``semantic_hold_s`` after the keyword's end) and a retraction (``retract_s``) to rest of each arm whose
+   next unit leaves it free for ``retract_s + rest_gap_s`` (otherwise the arm holds until its next
+   preparation). Arm units are sequential: a unit whose stroke would start less than ``min_prep_s`` after
+   the previous unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head
+   shake: it uses no arm and never conflicts.
 2. **renders** the units as keyframe tracks of arm poses (body.POSES) with minimum-jerk transitions, adds
    *batons* (on each syllable the forearms flick up or down, alternately, to ``+-baton_deg/2`` x gain x
    min(1.5, syllable duration / 0.2 s), with a minimum-jerk profile, lagged ``baton_lag_s``: wrist speed
@@ -55,6 +56,7 @@ class Unit:
     amplitude: float
     end: float = 0.0          # end of the retraction (or of the hold, when the next unit follows on)
     retracts: bool = True
+    retract_arms: str = ""    # the arms that return to rest after the hold
 
 
 @dataclass
@@ -109,12 +111,12 @@ def plan_gestures(transcript: Transcript, emphasis: list[bool], params: MotionPa
     kept: list[Unit] = []
     shakes = [u for u in units if u.kind == "negation"]      # the head is free: shakes never conflict
     for unit in (u for u in units if u.kind != "negation"):
-        while kept and unit.stroke_start < kept[-1].hold_end + 0.02:
+        while kept and unit.stroke_start < kept[-1].hold_end + p.min_prep_s:
             if unit.kind != "beat" and kept[-1].kind == "beat":
                 kept.pop()          # a semantic gesture wins over a beat
                 continue
             break
-        if kept and unit.stroke_start < kept[-1].hold_end + 0.02:
+        if kept and unit.stroke_start < kept[-1].hold_end + p.min_prep_s:
             continue
         if kept:
             unit.prep_start = max(unit.prep_start, kept[-1].hold_end)
@@ -122,12 +124,14 @@ def plan_gestures(transcript: Transcript, emphasis: list[bool], params: MotionPa
     for unit in shakes:
         unit.end = unit.hold_end
     for k, unit in enumerate(kept):
+        # an arm retracts when its next unit leaves it free long enough; otherwise it holds until then
+        for arm in unit.arms:
+            nxt_arm = next((v for v in kept[k + 1:] if arm in v.arms), None)
+            if nxt_arm is None or nxt_arm.prep_start - unit.hold_end >= unit.retract_s + p.rest_gap_s:
+                unit.retract_arms += arm
+        unit.retracts = bool(unit.retract_arms)
         nxt = kept[k + 1] if k + 1 < len(kept) else None
-        free = (nxt.prep_start - unit.hold_end) if nxt is not None else np.inf
-        unit.retracts = free >= unit.retract_s + p.rest_gap_s or nxt is None or not set(unit.arms) <= set(nxt.arms)
         unit.end = unit.hold_end + unit.retract_s if unit.retracts else (nxt.prep_start if nxt else unit.hold_end)
-        if nxt is not None and unit.retracts:
-            unit.end = min(unit.end, nxt.prep_start)
     return sorted(kept + shakes, key=lambda u: u.stroke_start)
 
 
@@ -149,8 +153,8 @@ def _arm_tracks(units: list[Unit], params: MotionParams) -> dict[str, Track]:
             tr.key(unit.stroke_start, ready)
             tr.key(unit.stroke_end, target)
             tr.key(unit.hold_end, target)
-            if unit.retracts:
-                tr.key(unit.end, rest)
+            if side[0] in unit.retract_arms:
+                tr.key(unit.hold_end + unit.retract_s, rest)
     return tracks
 
 

@@ -32,6 +32,7 @@ class MotionParams:
     beat_stroke_s: tuple[float, float] = (0.18, 0.28)
     semantic_stroke_s: tuple[float, float] = (0.45, 0.65)
     prep_s: tuple[float, float] = (0.45, 0.7)
+    min_prep_s: float = 0.2                        # a unit needs this long after the previous hold
     beat_hold_s: tuple[float, float] = (0.08, 0.2)
     semantic_hold_s: tuple[float, float] = (0.3, 0.6)   # after the keyword's end
     retract_s: tuple[float, float] = (1.2, 1.6)
