@@ -29,8 +29,6 @@ COMMANDS = {
     "train": "evalsuite.generators.cli:train_command",
     "corpus": "evalsuite.corpus.cli:corpus",
     "features": "evalsuite.features.cli:features",
-    # temporary: joins the `corpus` group (evalsuite/corpus/cli.py) as `evalsuite corpus synth`
-    "corpus-synth": "evalsuite.corpus.synth_cli:synth",
     "correlate": "evalsuite.analysis.correlate_cli:correlate",
 }
 
