@@ -1,0 +1,417 @@
+"""Layout for comparing, measured in a real browser (headless Debian Chromium, Playwright).
+
+A participant goes through a pairwise page, MUSHRA pages with 5 and 6 videos (side-by-side grid and the
+HEMVIP display), and Likert pages; on each page the test measures bounding boxes at 1366x768 (a common
+laptop) and 390x844 (a phone, with phones allowed): the question and Next are visible without
+scrolling, every MUSHRA video and slider is visible at once in one row or grid, Likert point columns are
+equally wide, band labels do not overlap and nothing overflows sideways. Screenshots go to
+$STUDY_SCREENSHOTS (or the test's tmp dir).
+"""
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import threading
+from types import SimpleNamespace
+
+import pytest
+import study_helpers as h
+from werkzeug.serving import make_server
+
+from study_app import create_app
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow]
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
+        "--disable-component-update", "--no-first-run", "--disable-dev-shm-usage",
+        "--autoplay-policy=no-user-gesture-required"]
+LAPTOP = {"width": 1366, "height": 768}
+PHONE = {"width": 390, "height": 844}
+
+CONDITIONS = ["SYSA", "SYSB", "SYSC", "SYSD", "SYSE", "NATURALGT"]
+
+LAYOUT_YAML = """\
+id: layout-test
+title: Gesture study
+stimuli: stim/manifest.csv
+platform: prolific
+sessions: 2
+seed: 1
+completion_code: DONE1234
+failure_code: FAIL5678
+min_width: 320
+block_mobile: false
+pages:
+  - type: pairwise
+    id: hl
+    title: Which character moves more like a real person?
+    text: Watch both videos to the end, then answer the question below.
+    conditions: [SYSA, SYSB]
+    levels: 5
+    questions:
+      - {id: human_likeness, text: "In which video does the character gesture more like a real person?"}
+    reasons:
+      - {id: smooth, text: Smoother motion}
+      - {id: rhythm, text: Better rhythm}
+      - {id: shape, text: More natural hand shapes}
+    reasons_required: true
+    pages: 1
+    muted: true
+  - type: mushra
+    id: m5
+    conditions: [SYSA, SYSB, SYSC, SYSD]
+    reference: NATURALGT
+    question: {id: hl5, text: "How human-like does the gesture motion appear?"}
+    pages: 1
+    muted: true
+  - type: mushra
+    id: m6
+    conditions: [SYSA, SYSB, SYSC, SYSD, SYSE]
+    reference: NATURALGT
+    question: {id: hl6, text: "How human-like does the gesture motion appear?"}
+    slider_numbers: false
+    pages: 1
+    muted: true
+  - type: mushra
+    id: hv
+    layout: hemvip
+    conditions: [SYSA, SYSB, SYSC, SYSD, SYSE]
+    reference: NATURALGT
+    question: {id: hlhv, text: "How human-like does the gesture motion appear?"}
+    slider_numbers: false
+    pages: 1
+    muted: true
+  - type: likert
+    id: lk7
+    conditions: [SYSA]
+    points: 7
+    statements:
+      - {id: natural, text: The motion looks natural., scale: naturalness}
+      - {id: fits, text: "The motion fits the speech, both in its rhythm and in what is said.", scale: appropriateness}
+      - {id: calm, text: The character seems calm., scale: calm}
+    pages: 1
+  - type: likert
+    id: lk5
+    conditions: [SYSB]
+    points: 5
+    labels: [Strongly disagree, Disagree, Neither agree nor disagree, Agree, Strongly agree]
+    statements:
+      - {id: natural5, text: The motion looks natural., scale: naturalness}
+    pages: 1
+  - type: finish
+    id: finish
+    text: Thank you.
+"""
+
+
+class Server:
+    def __init__(self, app):
+        self.app = app
+        self.httpd = make_server("127.0.0.1", 0, app, threaded=True)
+        self.port = self.httpd.server_port
+        self.thread = threading.Thread(target=self.httpd.serve_forever, daemon=True)
+        self.thread.start()
+
+    @property
+    def url(self):
+        return f"http://127.0.0.1:{self.port}"
+
+    def stop(self):
+        self.httpd.shutdown()
+        self.httpd.server_close()
+        self.thread.join(10)
+
+
+def make_layout_study(folder, yaml_text=LAYOUT_YAML):
+    from study_app.definition import load_study
+    from study_app.design import build_plans, default_plans_path, write_plans
+    from study_app.samples import make_sample_stimuli
+
+    folder = pathlib.Path(folder)
+    if not (folder / "stim" / "manifest.csv").exists():
+        # 16:9 clips, as the render step's widescreen output and most GENEA material
+        make_sample_stimuli(folder / "stim", CONDITIONS, ["seg01", "seg02"], seconds=0.4, size=(256, 144))
+    path = folder / "layout.yaml"
+    path.write_text(yaml_text)
+    study = load_study(path)
+    write_plans(build_plans(study), default_plans_path(study))
+    return path
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("layout")
+    path = make_layout_study(folder)
+    shots = pathlib.Path(os.environ.get("STUDY_SCREENSHOTS") or folder / "screens")
+    shots.mkdir(parents=True, exist_ok=True)
+    app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{folder / 'layout.db'}",
+                      "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
+                      "INSTANCE_PATH": str(folder / "inst")})
+    server = Server(app)
+    from playwright.sync_api import sync_playwright
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        yield SimpleNamespace(folder=folder, shots=shots, server=server, browser=browser, app=app)
+        browser.close()
+    server.stop()
+
+
+class Journey:
+    """One participant going through the layout study page by page (pages in definition order)."""
+
+    def __init__(self, env, pid):
+        self.env = env
+        self.context = env.browser.new_context(viewport=LAPTOP)
+        self.page = self.context.new_page()
+        self.page.set_default_timeout(20000)
+        self.page.goto(env.server.url + h.prolific_url(pid, "layout-test"))
+        assert "/s/" in self.page.url
+        self.sid = self.page.url.split("/s/")[1].strip("/")
+
+    def data(self):
+        return json.loads(self.page.locator("#page-data").text_content())
+
+    def block(self):
+        return h.plan_pages(self.env.app, self.sid)[self.data()["index"]]["block"]
+
+    def goto(self, block):
+        """Answer pages until the current page belongs to ``block``."""
+        while self.block() != block:
+            self.answer()
+        self.page.set_viewport_size(LAPTOP)
+        self.page.wait_for_timeout(100)
+
+    def play_all(self):
+        for k in range(self.page.locator("video[data-slot]").count()):
+            if "ok" not in (self.page.get_attribute(f".status[data-slot='{k}']", "class") or ""):
+                self.page.click(f"button.play[data-slot='{k}']")
+                self.page.wait_for_selector(f".status[data-slot='{k}'].ok")
+
+    def answer(self):
+        self.page.set_viewport_size(LAPTOP)
+        self.play_all()
+        self.page.evaluate("""() => {
+          document.querySelectorAll('input[type=range]').forEach((r, i) => {
+            r.value = String(20 + 10 * i); r.dispatchEvent(new Event('input', {bubbles: true})); });
+          const last = {};
+          document.querySelectorAll('input[type=radio]').forEach(r => { last[r.name] = r; });
+          Object.values(last).forEach(r => { r.checked = true; r.dispatchEvent(new Event('input', {bubbles: true})); });
+          document.querySelectorAll('input[name=reason]').forEach(c => {
+            c.checked = true; c.dispatchEvent(new Event('change', {bubbles: true})); });
+        }""")
+        self.page.wait_for_selector("#next:not([disabled])")
+        with self.page.expect_navigation():
+            self.page.click("#next")
+
+    def at(self, viewport, name):
+        """Resize the window, let the page settle, take a screenshot."""
+        self.page.set_viewport_size(viewport)
+        self.page.wait_for_timeout(250)
+        self.page.screenshot(path=str(self.env.shots / f"{name}-{viewport['width']}x{viewport['height']}.png"))
+
+    def box(self, selector):
+        return self.page.eval_on_selector(selector, BOX_JS)
+
+    def boxes(self, selector):
+        return self.page.eval_on_selector_all(selector, f"els => els.map({BOX_JS})")
+
+    def viewport(self):
+        return self.page.evaluate("() => ({w: window.innerWidth, h: window.innerHeight, sx: window.scrollX, "
+                                  "sy: window.scrollY, sw: document.documentElement.scrollWidth})")
+
+
+BOX_JS = ("el => { const r = el.getBoundingClientRect(); "
+          "return {x: r.left, y: r.top, r: r.right, b: r.bottom, w: r.width, h: r.height}; }")
+
+
+def assert_visible(j, box, what):
+    """The box lies inside the window as it is shown (no scrolling)."""
+    vp = j.viewport()
+    assert vp["sy"] == 0
+    assert box["w"] > 0 and box["h"] > 0, what
+    assert box["y"] >= 0 and box["b"] <= vp["h"] + 0.5, f"{what} not inside the window height {vp['h']}: {box}"
+    assert box["x"] >= 0 and box["r"] <= vp["w"] + 0.5, f"{what} not inside the window width {vp['w']}: {box}"
+
+
+def assert_no_sideways_overflow(j):
+    vp = j.viewport()
+    assert vp["sw"] <= vp["w"], f"the page is {vp['sw']} px wide in a {vp['w']} px window"
+
+
+def assert_apart(boxes, what):
+    """No two boxes overlap (touching is fine)."""
+    for a in range(len(boxes)):
+        for b in range(a + 1, len(boxes)):
+            p, q = boxes[a], boxes[b]
+            overlap_x = min(p["r"], q["r"]) - max(p["x"], q["x"])
+            overlap_y = min(p["b"], q["b"]) - max(p["y"], q["y"])
+            assert overlap_x <= 0.5 or overlap_y <= 0.5, f"{what} {a} and {b} overlap: {p} {q}"
+
+
+@pytest.fixture(scope="module")
+def journey(env):
+    j = Journey(env, "5f3a1c9e8b7d6a5f4e3d2c1b")
+    yield j
+    j.context.close()
+
+
+def test_pairwise_question_and_next_visible_without_scrolling(journey):
+    j = journey
+    j.goto("hl")
+    for vp in (LAPTOP, {"width": 1366, "height": 657}):   # 657: a 1366x768 screen minus the browser's bars
+        j.at(vp, "pairwise")
+        videos = j.boxes("video[data-slot]")
+        assert len(videos) == 2
+        assert abs(videos[0]["y"] - videos[1]["y"]) < 1, "the two videos side by side"
+        for k, v in enumerate(videos):
+            assert_visible(j, v, f"video {k}")
+            assert v["h"] >= 150, "videos stay large enough to compare"
+            assert abs(v["w"] / v["h"] - 16 / 9) < 0.02, "16:9 clips keep their aspect ratio"
+        assert_visible(j, j.box("fieldset.question"), "the question")
+        assert_visible(j, j.box("fieldset.reasons"), "the reasons")
+        assert_visible(j, j.box("#next"), "Next")
+        assert_no_sideways_overflow(j)
+    j.at(PHONE, "pairwise")
+    assert_no_sideways_overflow(j)
+    videos = j.boxes("video[data-slot]")
+    assert abs(videos[0]["y"] - videos[1]["y"]) < 1, "side by side on a phone too"
+    for k, v in enumerate(videos):
+        assert_visible(j, v, f"video {k}")
+
+
+def check_mushra_grid(j, n, name, numbers):
+    j.at(LAPTOP, name)
+    videos = j.boxes("video[data-slot]")
+    sliders = j.boxes("input[type=range]")
+    assert len(videos) == len(sliders) == n
+    assert len({round(v["y"]) for v in videos}) == 1, "all videos in one row"
+    assert all(videos[k]["x"] < videos[k + 1]["x"] for k in range(n - 1))
+    for k in range(n):
+        assert_visible(j, videos[k], f"video {k + 1}")
+        assert_visible(j, sliders[k], f"slider {k + 1}")
+        assert videos[k]["h"] >= 96
+    assert_apart(videos, "videos")
+    assert_visible(j, j.box("#next"), "Next")
+    assert_no_sideways_overflow(j)
+    assert j.page.locator("output[data-slot]").count() == (n if numbers else 0)
+    check_band_labels(j)
+    j.at(PHONE, name)
+    assert_no_sideways_overflow(j)
+    videos = j.boxes("video[data-slot]")
+    lefts, tops = sorted({round(v["x"]) for v in videos}), sorted({round(v["y"]) for v in videos})
+    assert len(lefts) == 2 and len(tops) == (n + 1) // 2, "a grid of two columns on a phone"
+    assert_apart(j.boxes(".rating-card"), "cards")
+    for card in j.boxes(".rating-card"):
+        assert card["x"] >= 0 and card["r"] <= PHONE["width"]
+    check_band_labels(j)
+
+
+def check_band_labels(j):
+    cards = j.page.locator(".rating-card")
+    for c in range(cards.count()):
+        labels = cards.nth(c).locator(".band-label").evaluate_all(f"els => els.map({BOX_JS})")
+        card = cards.nth(c).evaluate(BOX_JS)
+        assert [t.strip() for t in cards.nth(c).locator(".band-label").all_text_contents()] == \
+            ["Bad", "Poor", "Fair", "Good", "Excellent"]
+        assert_apart(labels, f"band labels of card {c + 1}")
+        for lab in labels:
+            assert card["x"] <= lab["x"] and lab["r"] <= card["r"] + 0.5, "a band label leaves its card"
+        # left to right in band order
+        centres = [(lab["x"] + lab["r"]) / 2 for lab in labels]
+        assert centres == sorted(centres)
+
+
+def test_mushra_five_videos_side_by_side(journey):
+    journey.goto("m5")
+    check_mushra_grid(journey, 5, "mushra-5", numbers=True)
+
+
+def test_mushra_six_videos_side_by_side_without_numbers(journey):
+    journey.goto("m6")
+    check_mushra_grid(journey, 6, "mushra-6", numbers=False)
+
+
+def test_mushra_hemvip_display(journey):
+    """One visible player whose clip the buttons choose; vertical sliders side by side on one labelled
+    scale (Excellent at the top, Bad at the bottom); no numbers."""
+    j = journey
+    j.goto("hv")
+    for vp in (LAPTOP, PHONE):
+        j.at(vp, "mushra-hemvip")
+        assert_no_sideways_overflow(j)
+        shown = j.boxes("video[data-slot]:not([hidden])")
+        assert len(shown) == 1 and j.page.locator("video[data-slot]").count() == 6
+        assert_visible(j, shown[0], "the player")
+        buttons, sliders = j.boxes("button.play"), j.boxes("input[type=range]")
+        assert len(buttons) == len(sliders) == 6
+        for k in range(6):
+            assert_visible(j, buttons[k], f"button {k + 1}")
+            assert_visible(j, sliders[k], f"slider {k + 1}")
+            assert sliders[k]["h"] > 4 * sliders[k]["w"], "vertical sliders"
+            assert buttons[k]["b"] <= sliders[k]["y"], "each button above its slider"
+            assert abs((buttons[k]["x"] + buttons[k]["r"]) - (sliders[k]["x"] + sliders[k]["r"])) < 2
+        assert len({round(s["y"]) for s in sliders}) == 1 and len({round(s["b"]) for s in sliders}) == 1, \
+            "one scale: every slider spans the same height"
+        assert all(sliders[k]["r"] <= sliders[k + 1]["x"] for k in range(5)), "side by side"
+        labels = j.boxes(".hv-axis .band-label")
+        names = [t.strip() for t in j.page.locator(".hv-axis .band-label").all_text_contents()]
+        assert names == ["Excellent", "Good", "Fair", "Poor", "Bad"]
+        assert_apart(labels, "scale labels")
+        # each label sits in its fifth of the slider's travel (the thumb's centre), left of the sliders
+        top, bottom = sliders[0]["y"] + 8, sliders[0]["b"] - 8
+        for k, lab in enumerate(labels):
+            centre = (lab["y"] + lab["b"]) / 2
+            assert top + k * (bottom - top) / 5 < centre < top + (k + 1) * (bottom - top) / 5
+            assert lab["r"] <= sliders[0]["x"]
+        assert j.page.locator("output").count() == 0, "slider_numbers: false shows no numbers"
+        assert_visible(j, j.box("#next"), "Next")
+    j.at(LAPTOP, "mushra-hemvip")
+    # a button chooses the clip shown, and plays it
+    j.page.click("button.play[data-slot='3']")
+    j.page.wait_for_selector(".status[data-slot='3'].ok")
+    assert j.page.locator("video[data-slot]:not([hidden])").get_attribute("data-slot") == "3"
+    assert "selected" in j.page.get_attribute(".hv-head[data-slot='3']", "class")
+    j.page.click("button.play[data-slot='1']")
+    j.page.wait_for_selector(".status[data-slot='1'].ok")
+    assert j.page.locator("video[data-slot]:not([hidden])").get_attribute("data-slot") == "1"
+    j.at(LAPTOP, "mushra-hemvip-played")
+
+
+def check_likert(j, points, name):
+    for vp in (LAPTOP, PHONE):
+        j.at(vp, name)
+        assert_no_sideways_overflow(j)
+        table = j.box(".likert")
+        card = j.box("#page-form")
+        assert table["r"] <= card["r"] and table["x"] >= card["x"]
+        heads = j.boxes(".lk-point")
+        assert len(heads) == points
+        rows = j.page.locator(".lk-row")
+        for r in range(rows.count()):
+            cells = rows.nth(r).locator(".lk-cell").evaluate_all(f"els => els.map({BOX_JS})")
+            widths = [c["w"] for c in cells + heads]
+            assert max(widths) - min(widths) < 1, f"unequal point columns: {widths}"
+            for c, hd in zip(cells, heads):   # each point's heading above its column
+                assert abs((c["x"] + c["r"]) / 2 - (hd["x"] + hd["r"]) / 2) < 1
+            gaps = [cells[k + 1]["x"] - cells[k]["x"] for k in range(points - 1)]
+            assert max(gaps) - min(gaps) < 1, "equally spaced"
+        labels = j.boxes(".lk-label, .lk-end")
+        assert_apart(labels, "scale labels")
+        for lab in labels:
+            assert lab["x"] >= card["x"] and lab["r"] <= card["r"]
+        if vp is LAPTOP:
+            assert_visible(j, j.box("#next"), "Next")
+            for r in range(rows.count()):
+                assert_visible(j, rows.nth(r).evaluate(BOX_JS), f"statement {r + 1}")
+
+
+def test_likert_equal_columns_seven_points(journey):
+    journey.goto("lk7")
+    check_likert(journey, 7, "likert-7")
+
+
+def test_likert_equal_columns_five_labelled_points(journey):
+    journey.goto("lk5")
+    check_likert(journey, 5, "likert-5")
