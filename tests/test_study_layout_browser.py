@@ -13,13 +13,17 @@ import json
 import os
 import pathlib
 import threading
+import urllib.request
 from types import SimpleNamespace
 
 import pytest
 import study_helpers as h
+from layout_helpers import make_layout_study
 from werkzeug.serving import make_server
 
 from study_app import create_app
+from study_app.context import store_of
+from study_app.storage import Event
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -29,81 +33,6 @@ ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--autoplay-policy=no-user-gesture-required"]
 LAPTOP = {"width": 1366, "height": 768}
 PHONE = {"width": 390, "height": 844}
-
-CONDITIONS = ["SYSA", "SYSB", "SYSC", "SYSD", "SYSE", "NATURALGT"]
-
-LAYOUT_YAML = """\
-id: layout-test
-title: Gesture study
-stimuli: stim/manifest.csv
-platform: prolific
-sessions: 2
-seed: 1
-completion_code: DONE1234
-failure_code: FAIL5678
-min_width: 320
-block_mobile: false
-pages:
-  - type: pairwise
-    id: hl
-    title: Which character moves more like a real person?
-    text: Watch both videos to the end, then answer the question below.
-    conditions: [SYSA, SYSB]
-    levels: 5
-    questions:
-      - {id: human_likeness, text: "In which video does the character gesture more like a real person?"}
-    reasons:
-      - {id: smooth, text: Smoother motion}
-      - {id: rhythm, text: Better rhythm}
-      - {id: shape, text: More natural hand shapes}
-    reasons_required: true
-    pages: 1
-    muted: true
-  - type: mushra
-    id: m5
-    conditions: [SYSA, SYSB, SYSC, SYSD]
-    reference: NATURALGT
-    question: {id: hl5, text: "How human-like does the gesture motion appear?"}
-    pages: 1
-    muted: true
-  - type: mushra
-    id: m6
-    conditions: [SYSA, SYSB, SYSC, SYSD, SYSE]
-    reference: NATURALGT
-    question: {id: hl6, text: "How human-like does the gesture motion appear?"}
-    slider_numbers: false
-    pages: 1
-    muted: true
-  - type: mushra
-    id: hv
-    layout: hemvip
-    conditions: [SYSA, SYSB, SYSC, SYSD, SYSE]
-    reference: NATURALGT
-    question: {id: hlhv, text: "How human-like does the gesture motion appear?"}
-    slider_numbers: false
-    pages: 1
-    muted: true
-  - type: likert
-    id: lk7
-    conditions: [SYSA]
-    points: 7
-    statements:
-      - {id: natural, text: The motion looks natural., scale: naturalness}
-      - {id: fits, text: "The motion fits the speech, both in its rhythm and in what is said.", scale: appropriateness}
-      - {id: calm, text: The character seems calm., scale: calm}
-    pages: 1
-  - type: likert
-    id: lk5
-    conditions: [SYSB]
-    points: 5
-    labels: [Strongly disagree, Disagree, Neither agree nor disagree, Agree, Strongly agree]
-    statements:
-      - {id: natural5, text: The motion looks natural., scale: naturalness}
-    pages: 1
-  - type: finish
-    id: finish
-    text: Thank you.
-"""
 
 
 class Server:
@@ -124,22 +53,6 @@ class Server:
         self.thread.join(10)
 
 
-def make_layout_study(folder, yaml_text=LAYOUT_YAML):
-    from study_app.definition import load_study
-    from study_app.design import build_plans, default_plans_path, write_plans
-    from study_app.samples import make_sample_stimuli
-
-    folder = pathlib.Path(folder)
-    if not (folder / "stim" / "manifest.csv").exists():
-        # 16:9 clips, as the render step's widescreen output and most GENEA material
-        make_sample_stimuli(folder / "stim", CONDITIONS, ["seg01", "seg02"], seconds=0.4, size=(256, 144))
-    path = folder / "layout.yaml"
-    path.write_text(yaml_text)
-    study = load_study(path)
-    write_plans(build_plans(study), default_plans_path(study))
-    return path
-
-
 @pytest.fixture(scope="module")
 def env(tmp_path_factory):
     folder = tmp_path_factory.mktemp("layout")
@@ -148,7 +61,7 @@ def env(tmp_path_factory):
     shots.mkdir(parents=True, exist_ok=True)
     app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{folder / 'layout.db'}",
                       "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
-                      "INSTANCE_PATH": str(folder / "inst")})
+                      "INSTANCE_PATH": str(folder / "inst"), "ADMIN_REFRESH_SECONDS": 1})
     server = Server(app)
     from playwright.sync_api import sync_playwright
     with sync_playwright() as pw:
@@ -415,3 +328,96 @@ def test_likert_equal_columns_seven_points(journey):
 def test_likert_equal_columns_five_labelled_points(journey):
     journey.goto("lk5")
     check_likert(journey, 5, "likert-5")
+
+
+def wait_for_text(page, selector, text):
+    """Poll from Python (the study's CSP refuses the eval that wait_for_function needs)."""
+    for _ in range(100):
+        if text in (page.text_content(selector) or ""):
+            return
+        page.wait_for_timeout(100)
+    assert text in (page.text_content(selector) or "")
+
+
+def test_report_a_video_that_does_not_play(journey, env):
+    """From a media page the participant reports a video that does not play; the admin sees it counted
+    for that stimulus."""
+    j = journey
+    j.goto("lk5")
+    spec = h.plan_pages(env.app, j.sid)[j.data()["index"]]
+    assert j.page.is_hidden("#report-send")
+    for vp in (LAPTOP, PHONE):
+        j.page.set_viewport_size(vp)
+        j.page.click("#report summary")
+        j.page.wait_for_selector("#report-send", state="visible")
+        assert_visible(j, j.box(".report-box"), "the report box")
+        assert_visible(j, j.box("#next"), "Next") if vp is LAPTOP else None
+        assert_no_sideways_overflow(j)
+        j.at(vp, "report-open")
+        j.page.click("#report summary")
+    j.page.set_viewport_size(LAPTOP)
+    j.page.click("#report summary")
+    # one video on a Likert page: the only choice is "every video on this page"
+    assert j.page.locator("#report-slot option").all_text_contents() == ["Every video on this page"]
+    with j.page.expect_response(lambda r: "/events/" in r.url) as resp:
+        j.page.click("#report-send")
+    assert resp.value.status == 200
+    wait_for_text(j.page, "#report-status", "Thank you")
+    j.at(LAPTOP, "report-sent")
+    status = json.loads(urllib.request.urlopen(urllib.request.Request(
+        env.server.url + "/admin/status.json", headers={"Authorization": f"Bearer {h.ADMIN}"})).read())
+    assert [(r["file"], r["reports"]) for r in status["reports"]] == [(spec["stimulus"], 1)]
+    row = [p for p in status["participants"] if p["session"] == j.sid][0]
+    assert row["reports"] == 1
+
+
+def test_report_names_the_videos_of_a_pairwise_page(env):
+    j = Journey(env, "6a4b2c0d9e8f7a6b5c4d3e2f")
+    try:
+        assert j.block() == "hl"
+        j.page.click("#report summary")
+        assert j.page.locator("#report-slot option").all_text_contents() == \
+            ["Every video on this page", "Left video", "Right video"]
+        j.page.select_option("#report-slot", "1")
+        with j.page.expect_response(lambda r: "/events/" in r.url):
+            j.page.click("#report-send")
+        wait_for_text(j.page, "#report-status", "Thank you")
+        with store_of(env.app).Session() as db:
+            events = db.query(Event).filter_by(session_id=j.sid, kind="unplayable").all()
+            assert [(e.page_index, e.slot) for e in events] == [(0, 1)]
+            assert "1:ready=" in events[0].detail          # the player's state, for the researcher
+    finally:
+        j.context.close()
+
+
+def test_admin_page_refreshes_by_itself(env):
+    admin = env.browser.new_page(viewport=LAPTOP)
+    try:
+        admin.goto(env.server.url + "/admin/")
+        admin.fill("input[name=token]", h.ADMIN)
+        admin.click("button[type=submit]")
+        admin.wait_for_selector("#participants")
+        admin.evaluate("window.notReloaded = true")
+        before = admin.locator("#participants tbody tr").count()
+        newcomer = "7b5c3d1e0f9a8b7c6d5e4f3a"
+        j = Journey(env, newcomer)
+        try:
+            for _ in range(100):    # the page polls every second here (15 s by default)
+                if newcomer in admin.text_content("#participants"):
+                    break
+                admin.wait_for_timeout(100)
+            assert newcomer in admin.text_content("#participants")
+            assert admin.evaluate("window.notReloaded") is True, "updated in place, not reloaded"
+            assert admin.locator("#participants tbody tr").count() == before + 1
+            row = admin.locator(f"#participants tbody tr[data-session='{j.sid}'] td").all_text_contents()
+            assert row[0] == newcomer
+            assert row[1] == "prolific"
+            assert row[2] == "active"
+            assert row[3].startswith("1 of 7: hl (pairwise)")
+            assert row[6:9] == ["0", "0", "0"]
+            assert "Updated" in admin.text_content("#refreshed")
+            admin.screenshot(path=str(env.shots / "admin-participants.png"), full_page=True)
+        finally:
+            j.context.close()
+    finally:
+        admin.close()
