@@ -1,6 +1,8 @@
 """``mushra``: several videos of one segment rated on 0-100 sliders (MUSHRA-style, ITU-R BS.1534), with
 an optional hidden reference and anchor; slot order rotates so each condition is in each slot equally
-often."""
+often. Displayed side by side (``layout: grid``) or as HEMVIP does (``layout: hemvip``: one player, a
+button per video above vertical sliders on one labelled scale); ``slider_numbers: false`` hides the
+numbers."""
 from __future__ import annotations
 
 import math
