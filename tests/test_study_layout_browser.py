@@ -18,7 +18,7 @@ from types import SimpleNamespace
 
 import pytest
 import study_helpers as h
-from layout_helpers import make_layout_study
+from layout_helpers import make_layout_study, make_more_study
 from werkzeug.serving import make_server
 
 from study_app import create_app
@@ -74,12 +74,12 @@ def env(tmp_path_factory):
 class Journey:
     """One participant going through the layout study page by page (pages in definition order)."""
 
-    def __init__(self, env, pid):
+    def __init__(self, env, pid, study_id="layout-test"):
         self.env = env
         self.context = env.browser.new_context(viewport=LAPTOP)
         self.page = self.context.new_page()
         self.page.set_default_timeout(20000)
-        self.page.goto(env.server.url + h.prolific_url(pid, "layout-test"))
+        self.page.goto(env.server.url + h.prolific_url(pid, study_id))
         assert "/s/" in self.page.url
         self.sid = self.page.url.split("/s/")[1].strip("/")
 
@@ -194,13 +194,15 @@ def test_pairwise_question_and_next_visible_without_scrolling(journey):
         assert_visible(j, v, f"video {k}")
 
 
-def check_mushra_grid(j, n, name, numbers):
+def check_mushra_grid(j, n, name, numbers, rows=1):
     j.at(LAPTOP, name)
     videos = j.boxes("video[data-slot]")
     sliders = j.boxes("input[type=range]")
     assert len(videos) == len(sliders) == n
-    assert len({round(v["y"]) for v in videos}) == 1, "all videos in one row"
-    assert all(videos[k]["x"] < videos[k + 1]["x"] for k in range(n - 1))
+    assert len({round(v["y"]) for v in videos}) == rows, f"all videos in {rows} row(s)"
+    per_row = -(-n // rows)
+    assert len({round(v["x"]) for v in videos}) == per_row
+    assert all(videos[k]["x"] < videos[k + 1]["x"] for k in range(n - 1) if (k + 1) % per_row)
     for k in range(n):
         assert_visible(j, videos[k], f"video {k + 1}")
         assert_visible(j, sliders[k], f"slider {k + 1}")
@@ -221,13 +223,12 @@ def check_mushra_grid(j, n, name, numbers):
     check_band_labels(j)
 
 
-def check_band_labels(j):
+def check_band_labels(j, names=("Bad", "Poor", "Fair", "Good", "Excellent")):
     cards = j.page.locator(".rating-card")
     for c in range(cards.count()):
         labels = cards.nth(c).locator(".band-label").evaluate_all(f"els => els.map({BOX_JS})")
         card = cards.nth(c).evaluate(BOX_JS)
-        assert [t.strip() for t in cards.nth(c).locator(".band-label").all_text_contents()] == \
-            ["Bad", "Poor", "Fair", "Good", "Excellent"]
+        assert [t.strip() for t in cards.nth(c).locator(".band-label").all_text_contents()] == list(names)
         assert_apart(labels, f"band labels of card {c + 1}")
         for lab in labels:
             assert card["x"] <= lab["x"] and lab["r"] <= card["r"] + 0.5, "a band label leaves its card"
@@ -246,20 +247,18 @@ def test_mushra_six_videos_side_by_side_without_numbers(journey):
     check_mushra_grid(journey, 6, "mushra-6", numbers=False)
 
 
-def test_mushra_hemvip_display(journey):
+def check_hemvip(j, n, name, numbers=False):
     """One visible player whose clip the buttons choose; vertical sliders side by side on one labelled
     scale (Excellent at the top, Bad at the bottom); no numbers."""
-    j = journey
-    j.goto("hv")
     for vp in (LAPTOP, PHONE):
-        j.at(vp, "mushra-hemvip")
+        j.at(vp, name)
         assert_no_sideways_overflow(j)
         shown = j.boxes("video[data-slot]:not([hidden])")
-        assert len(shown) == 1 and j.page.locator("video[data-slot]").count() == 6
+        assert len(shown) == 1 and j.page.locator("video[data-slot]").count() == n
         assert_visible(j, shown[0], "the player")
         buttons, sliders = j.boxes("button.play"), j.boxes("input[type=range]")
-        assert len(buttons) == len(sliders) == 6
-        for k in range(6):
+        assert len(buttons) == len(sliders) == n
+        for k in range(n):
             assert_visible(j, buttons[k], f"button {k + 1}")
             assert_visible(j, sliders[k], f"slider {k + 1}")
             assert sliders[k]["h"] > 4 * sliders[k]["w"], "vertical sliders"
@@ -267,7 +266,7 @@ def test_mushra_hemvip_display(journey):
             assert abs((buttons[k]["x"] + buttons[k]["r"]) - (sliders[k]["x"] + sliders[k]["r"])) < 2
         assert len({round(s["y"]) for s in sliders}) == 1 and len({round(s["b"]) for s in sliders}) == 1, \
             "one scale: every slider spans the same height"
-        assert all(sliders[k]["r"] <= sliders[k + 1]["x"] for k in range(5)), "side by side"
+        assert all(sliders[k]["r"] <= sliders[k + 1]["x"] for k in range(n - 1)), "side by side"
         labels = j.boxes(".hv-axis .band-label")
         names = [t.strip() for t in j.page.locator(".hv-axis .band-label").all_text_contents()]
         assert names == ["Excellent", "Good", "Fair", "Poor", "Bad"]
@@ -278,9 +277,13 @@ def test_mushra_hemvip_display(journey):
             centre = (lab["y"] + lab["b"]) / 2
             assert top + k * (bottom - top) / 5 < centre < top + (k + 1) * (bottom - top) / 5
             assert lab["r"] <= sliders[0]["x"]
-        assert j.page.locator("output").count() == 0, "slider_numbers: false shows no numbers"
+        assert j.page.locator("output").count() == (n if numbers else 0), "slider_numbers"
+        if numbers:
+            for k, out in enumerate(j.boxes("output")):
+                assert_visible(j, out, f"number {k + 1}")
+                assert abs((out["x"] + out["r"]) - (sliders[k]["x"] + sliders[k]["r"])) < 2, "under its slider"
         assert_visible(j, j.box("#next"), "Next")
-    j.at(LAPTOP, "mushra-hemvip")
+    j.at(LAPTOP, name)
     # a button chooses the clip shown, and plays it
     j.page.click("button.play[data-slot='3']")
     j.page.wait_for_selector(".status[data-slot='3'].ok")
@@ -289,7 +292,12 @@ def test_mushra_hemvip_display(journey):
     j.page.click("button.play[data-slot='1']")
     j.page.wait_for_selector(".status[data-slot='1'].ok")
     assert j.page.locator("video[data-slot]:not([hidden])").get_attribute("data-slot") == "1"
-    j.at(LAPTOP, "mushra-hemvip-played")
+    j.at(LAPTOP, name + "-played")
+
+
+def test_mushra_hemvip_display(journey):
+    journey.goto("hv")
+    check_hemvip(journey, 6, "mushra-hemvip")
 
 
 def check_likert(j, points, name):
@@ -421,3 +429,52 @@ def test_admin_page_refreshes_by_itself(env):
             j.context.close()
     finally:
         admin.close()
+
+
+@pytest.fixture(scope="module")
+def more(env):
+    """A second study: two pairwise questions, 8 MUSHRA videos, an 11-point Likert scale."""
+    folder = env.folder / "more"
+    path = make_more_study(folder)
+    app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{folder / 'more.db'}",
+                      "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
+                      "INSTANCE_PATH": str(folder / "inst")})
+    server = Server(app)
+    ns = SimpleNamespace(folder=folder, shots=env.shots, server=server, browser=env.browser, app=app)
+    j = Journey(ns, "8c6d4e2f1a0b9c8d7e6f5a4b", study_id="layout-more")
+    yield j
+    j.context.close()
+    server.stop()
+
+
+def test_pairwise_two_questions_and_longer_text_fit(more):
+    j = more
+    j.goto("two")
+    for vp in (LAPTOP, {"width": 1366, "height": 657}):
+        j.at(vp, "pairwise-two-questions")
+        for k, v in enumerate(j.boxes("video[data-slot]")):
+            assert_visible(j, v, f"video {k}")
+            assert v["h"] >= 95
+        for k, q in enumerate(j.boxes("fieldset.question")):
+            assert_visible(j, q, f"question {k + 1}")
+        assert_visible(j, j.box("#next"), "Next")
+        assert_no_sideways_overflow(j)
+    j.at(PHONE, "pairwise-two-questions")
+    assert_no_sideways_overflow(j)
+    title = j.box("header.top .title")
+    assert title["r"] <= PHONE["width"] and title["h"] < 30, "a long study title stays on one line"
+
+
+def test_mushra_eight_videos_in_two_rows(more):
+    more.goto("m8")
+    check_mushra_grid(more, 8, "mushra-8", numbers=True, rows=2)
+
+
+def test_mushra_eight_videos_hemvip(more):
+    more.goto("hv8")
+    check_hemvip(more, 8, "mushra-hemvip-8", numbers=True)
+
+
+def test_likert_eleven_points(more):
+    more.goto("lk11")
+    check_likert(more, 11, "likert-11")
