@@ -478,3 +478,39 @@ def test_mushra_eight_videos_hemvip(more):
 def test_likert_eleven_points(more):
     more.goto("lk11")
     check_likert(more, 11, "likert-11")
+
+
+def test_pages_without_ratings_fit_a_small_phone(env):
+    """Consent, questionnaire and headphone check (the standard test study, phones allowed) on a 360 px
+    phone: nothing wider than the window, Next reachable."""
+    folder = env.folder / "phone"
+    text = h.STUDY_YAML.format(sessions=2).replace("min_width: 800", "min_width: 320\nblock_mobile: false")
+    path = h.make_study(folder, yaml_text=text)
+    app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{folder / 'phone.db'}",
+                      "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
+                      "INSTANCE_PATH": str(folder / "inst")})
+    server = Server(app)
+    small = {"width": 360, "height": 740}
+    try:
+        ns = SimpleNamespace(folder=folder, shots=env.shots, server=server, browser=env.browser, app=app)
+        j = Journey(ns, "9d7e5f3a2b1c0d9e8f7a6b5c", study_id="gesture-test")
+        j.page.set_viewport_size(small)
+        for name in ("consent", "questionnaire", "headphone-check"):
+            j.at(small, name)
+            assert_no_sideways_overflow(j)
+            assert j.page.is_hidden("#gate")
+            nxt = j.box("#next")
+            assert nxt["x"] >= 0 and nxt["r"] <= small["width"]
+            if name == "consent":
+                j.page.check("#agree")
+            elif name == "questionnaire":
+                j.page.fill("#q-age", "30")
+                j.page.select_option("#q-gender", "other")
+            else:
+                assert j.page.locator("#report summary").text_content() == "Sound does not play?"
+                break
+            with j.page.expect_navigation():
+                j.page.click("#next")
+        j.context.close()
+    finally:
+        server.stop()
