@@ -116,7 +116,7 @@
   videos.forEach(refreshButton);
 
   // ---- fit the page to the window: videos keep their aspect ratio and shrink (down to a minimum) until
-  // the question and Next are visible without scrolling
+  // the question and Next are visible without scrolling; a page too long for that keeps larger videos
   var MIN_VIDEO_H = 96;
   var fitQueued = false;
   function visibleVideos() {
@@ -132,7 +132,13 @@
       if (over <= 0) break;
       var rows = new Set(vids.map(function (v) { return Math.round(v.getBoundingClientRect().top); })).size;
       var h = Math.max.apply(null, vids.map(function (v) { return v.getBoundingClientRect().height; }));
-      var target = Math.max(MIN_VIDEO_H, Math.floor(h - Math.ceil(over / rows) - 1));
+      var target = Math.floor(h - Math.ceil(over / rows) - 1);
+      if (target < MIN_VIDEO_H) {
+        // the page cannot fit even with small videos (many statements, a phone): it scrolls anyway,
+        // so the videos keep a comfortable size
+        form.style.setProperty("--video-max-h", Math.max(MIN_VIDEO_H, Math.round(window.innerHeight * 0.45)) + "px");
+        break;
+      }
       if (target >= h) break;
       form.style.setProperty("--video-max-h", target + "px");
     }
