@@ -183,13 +183,19 @@
           return v.getAttribute("data-slot") + ":ready=" + v.readyState + ",net=" + v.networkState +
             (v.error ? ",error=" + v.error.code : "");
         }).join(" ");
-      var medium = videos[slot === null ? 0 : slot];
-      log("unplayable", slot, medium && slot !== null ? medium.currentTime : null, state.slice(0, 200));
+      var medium = slot === null ? null : videos[slot];
+      var report = {id: rid(), kind: "unplayable", slot: slot, t: medium ? medium.currentTime : null,
+                    ms: Date.now(), detail: state.slice(0, 200)};
       var status = document.getElementById("report-status");
       status.textContent = "Sending…";
-      flush().then(function () {
-        status.textContent = queue.length ? "Could not be sent yet; it is sent again in a few seconds." :
-          "Thank you, the researchers can see your report.";
+      // sent at once (not with the next batch) so that the participant learns whether it arrived
+      post(data.events_url, {events: [report]}).then(function (r) {
+        if (r.ok) { status.textContent = "Thank you, the researchers can see your report."; return; }
+        if (r.status >= 500) throw new Error(String(r.status));
+        status.textContent = "The report could not be stored (" + r.status + ").";
+      }).catch(function () {
+        queue.push(report);   // the log is sent again every few seconds
+        status.textContent = "No connection; the report is sent again in a few seconds.";
       });
     });
   }
