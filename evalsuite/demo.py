@@ -1,52 +1,68 @@
-"""``evalsuite demo``: the main job end to end on the sample data bundled in the package.
+"""``evalsuite demo``: the main job from speech to statistics, on a synthetic speaker it makes itself.
 
-Each part of evalsuite adds one step to :data:`STEPS`; a step is a function
-``run(out_dir: pathlib.Path, echo) -> None`` that reads the bundled samples (or what an
-earlier step wrote into ``out_dir``) and writes its results below ``out_dir``.
+Steps (:data:`evalsuite.pipeline.steps.STEPS`): synthesise a corpus, train the re-implemented seed systems for
+a short budget, generate the test split with them and the built-in conditions, score (FGD included), render
+side-by-side videos with the speech, build a study, simulate participants (stated as a simulation), analyse,
+correlate the metrics with the ratings. Each step prints what it wrote; a summary table closes the run.
 """
 from __future__ import annotations
 
-import importlib
 import pathlib
+import time
 
 import click
 
-from evalsuite.errors import InputError
+from evalsuite.pipeline.steps import STEPS, DemoSettings
 
-# (title, "module:function"), run in this order.
-STEPS = [
-    ("Motion: load the bundled BVH samples and write world positions", "evalsuite.motion.demo:run"),
-    ("Score: build sample conditions and score them", "evalsuite.metrics.demo:run"),
-    ("FGD: train a small motion encoder and score the conditions (needs the learned extra)",
-     "evalsuite.learned.demo:run"),
-    ("Render: side-by-side comparison of the sample conditions", "renderers.demo:run"),
-    ("Study: build a small study from the sample stimuli and show how to serve it", "study_app.demo:run"),
-    ("Analysis: analyse a simulated results.csv", "evalsuite.analysis.demo:run"),
-]
+
+def _summary(s: DemoSettings, times: list[tuple[str, float]]) -> list[str]:
+    import pandas as pd
+
+    lines = ["", "step                 seconds"]
+    lines += [f"{title.split(':')[0]:20s} {sec:7.1f}" for title, sec in times]
+    lines.append(f"{'total':20s} {sum(sec for _, sec in times):7.1f}")
+    summary = s.out / "score" / "summary.csv"
+    if summary.is_file():
+        table = pd.read_csv(summary)
+        table["value"] = pd.to_numeric(table["value"], errors="coerce")
+        keep = ["fgd", "energy_speed_r", "beat_a2m", "hellinger_speed", "jerk", "mse", "lexical_contrast_wide"]
+        table = table[table.metric.isin(keep)].pivot_table(index="condition", columns="metric", values="value")
+        lines += ["", "condition scores (score/summary.csv):", table.round(3).to_string()]
+    corr = s.summary.get("correlations")
+    if corr is not None and len(corr):
+        top = corr.sort_values("spearman_rho", key=abs, ascending=False).head(6)
+        lines += ["", "metrics vs simulated ratings (correlate/correlations.csv, top by |rho|):",
+                  top[["metric", "human_measure", "n", "spearman_rho", "kendall_tau_b"]].round(3).to_string(index=False)]
+    return lines
 
 
 @click.command()
 @click.option("-o", "--out", "out_dir", type=click.Path(file_okay=False, path_type=pathlib.Path),
-              default=pathlib.Path("evalsuite-demo"), show_default=True,
-              help="Folder for everything the demo writes.")
-def demo(out_dir: pathlib.Path):
-    """Run evalsuite's main job on the bundled sample motion.
+              default=pathlib.Path("evalsuite-demo"), show_default=True, help="Folder for everything the demo writes.")
+@click.option("--minutes", type=float, default=6.0, show_default=True, help="Minutes of synthetic speech.")
+@click.option("--budget-minutes", type=float, default=1.0, show_default=True,
+              help="Training budget of each re-implemented system.")
+@click.option("--demo-model", type=click.Path(exists=True, file_okay=False, path_type=pathlib.Path), default=None,
+              help="Folder of the published Aud2Repr2Pose demo model's files: adds it as a condition.")
+@click.option("--seed", type=int, default=0, show_default=True)
+def demo(out_dir: pathlib.Path, minutes: float, budget_minutes: float, demo_model: pathlib.Path | None,
+         seed: int) -> None:
+    """Run the main job from speech to statistics on a synthetic speaker (about 10 minutes on 2 cores).
 
-    Loads the sample BVH files shipped with evalsuite, prints their summaries and writes
-    their world positions; later steps score, render, build a study and analyse results.
+    \b
+    evalsuite demo                      # everything into evalsuite-demo/
+    evalsuite demo --minutes 2 --budget-minutes 0.2 -o quick/   # a quick look
     """
-    # Absolute, because steps write configs whose relative paths resolve against the config's folder.
-    out_dir = out_dir.resolve()
-    out_dir.mkdir(parents=True, exist_ok=True)
-    for i, (title, target) in enumerate(STEPS, 1):
+    s = DemoSettings(out=out_dir.resolve(), minutes=minutes, budget_minutes=budget_minutes, seed=seed,
+                     demo_model=demo_model.resolve() if demo_model else None)
+    s.out.mkdir(parents=True, exist_ok=True)
+    times = []
+    for i, (title, step) in enumerate(STEPS, 1):
         click.secho(f"[{i}/{len(STEPS)}] {title}", bold=True)
-        module_name, attr = target.split(":")
-        try:
-            module = importlib.import_module(module_name)
-        except ImportError as exc:
-            if not isinstance(exc, InputError):  # a real bug, not a missing optional extra
-                raise
-            click.echo(f"  skipped: {exc}")
-            continue
-        getattr(module, attr)(out_dir, click.echo)
-    click.secho(f"Done. Everything is in {out_dir.resolve()}", fg="green")
+        t0 = time.perf_counter()
+        step(s, click.echo)
+        times.append((title, time.perf_counter() - t0))
+    for line in _summary(s, times):
+        click.echo(line)
+    (s.out / "summary.txt").write_text("\n".join(_summary(s, times)) + "\n", encoding="utf-8")
+    click.secho(f"Done. Everything is in {s.out}", fg="green")

@@ -1,7 +1,8 @@
 """Demo step: a side-by-side video of the sample conditions and a tiny set of study stimuli.
 
-Uses the condition folders an earlier step wrote (``out_dir/conditions/<condition>/<segment>.bvh``)
-or, if there are none, the bundled BVH samples. Speech audio is synthesised (tone bursts).
+Uses the condition folders an earlier step wrote (``out_dir/conditions/<condition>/<segment>.bvh|.npz``) and
+their speech (``out_dir/speech/<segment>.wav``) or, if there are none, the bundled BVH samples with synthesised
+speech-like audio (tone bursts).
 Writes ``out_dir/render/compare.mp4``, ``compare.png`` and ``out_dir/render/stimuli/``
 (blinded videos + ``manifest.csv``).
 """
@@ -23,12 +24,13 @@ def find_conditions(out_dir: pathlib.Path) -> tuple[dict[str, str], list[str]]:
     or from the bundled samples (each sample one 'condition', one segment 'sample')."""
     root = out_dir / "conditions"
     folders = sorted(p for p in root.iterdir() if p.is_dir()) if root.is_dir() else []
-    stems = [{f.stem for f in p.glob("*.bvh")} for p in folders]
+    suffix = {p.name: next((s for s in (".bvh", ".npz") if any(p.glob(f"*{s}"))), ".bvh") for p in folders}
+    stems = [{f.stem for f in p.glob(f"*{suffix[p.name]}")} for p in folders]
     common = sorted(set.intersection(*stems)) if stems else []
     if folders and common:
         names = sorted((p.name for p in folders),
                        key=lambda n: (PREFERRED_ORDER.index(n) if n in PREFERRED_ORDER else len(PREFERRED_ORDER), n))
-        return {n: str(root / n / "{segment}.bvh") for n in names}, common
+        return {n: str(root / n / ("{segment}" + suffix[n])) for n in names}, common
     from evalsuite.motion.samples import sample_paths
 
     samples = [p for p in sample_paths() if p.stem != "bvhio_example"] or sample_paths()
@@ -44,15 +46,19 @@ def run(out_dir: pathlib.Path, echo) -> None:
     target.mkdir(parents=True, exist_ok=True)
     conditions, segments = find_conditions(out_dir)
     source = "condition folders" if segments != ["sample"] else "bundled samples (no condition folders found)"
-    audio_dir = target / "audio"
-    audio_dir.mkdir(exist_ok=True)
-    for k, seg in enumerate(segments[:2]):
-        write_wav(audio_dir / f"{seg}.wav", speech_like_audio(SECONDS, RATE, seed=k), RATE)
+    audio_dir = out_dir / "speech"
+    seconds = 6.0  # the corpus's own speech: a longer excerpt
+    if not all((audio_dir / f"{seg}.wav").is_file() for seg in segments[:2]):
+        seconds = SECONDS
+        audio_dir = target / "audio"
+        audio_dir.mkdir(exist_ok=True)
+        for k, seg in enumerate(segments[:2]):
+            write_wav(audio_dir / f"{seg}.wav", speech_like_audio(SECONDS, RATE, seed=k), RATE)
 
     seg = segments[0]
     settings = RenderSettings(width=240, height=180, framing="full", fps=30.0)
     paths = [pattern.format(segment=seg) for pattern in conditions.values()]
-    motions = prepare_motions(paths, settings, 0.0, SECONDS)
+    motions = prepare_motions(paths, settings, 0.0, seconds)
     names = list(conditions)
     layout = "grid" if len(names) > 3 else "side"
     info = render_video(motions, target / "compare.mp4", settings, audio=audio_dir / f"{seg}.wav",
@@ -68,7 +74,7 @@ def run(out_dir: pathlib.Path, echo) -> None:
         "segments": {s: {"audio": str(audio_dir / f"{s}.wav")} for s in segments[:2]},
         "conditions": conditions,
         "start": 0.0,
-        "end": SECONDS,
+        "end": seconds,
         "render": {"width": 192, "height": 144, "fps": 30.0, "framing": "full"},
         "attention_checks": [
             {"check": "instruction", "segment": segments[0], "condition": names[0],

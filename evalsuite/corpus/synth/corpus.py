@@ -45,9 +45,10 @@ class Layout:
 
 
 def assign_splits(n: int, rng: np.random.Generator, val: float = 0.1, test: float = 0.1) -> list[str]:
-    """Split names for ``n`` segments: a seeded permutation, at least one val and one test segment when n >= 3."""
+    """Split names for ``n`` segments: a seeded permutation, at least one val and one test segment when n >= 3,
+    and two test segments when n >= 8 (conditions such as ``mismatched`` need two)."""
     n_val = max(1 if n >= 3 else 0, int(round(val * n)))
-    n_test = max(1 if n >= 3 else 0, int(round(test * n)))
+    n_test = max(2 if n >= 8 else 1 if n >= 3 else 0, int(round(test * n)))
     names = ["val"] * n_val + ["test"] * n_test + ["train"] * (n - n_val - n_test)
     return [names[i] for i in rng.permutation(n)]
 

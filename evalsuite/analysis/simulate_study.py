@@ -1,0 +1,79 @@
+"""SIMULATED participants for any set of conditions (the demo's study; never a human result).
+
+Each simulated participant rates every condition on one MUSHRA page per segment (0-100; ``natural`` is the
+hidden reference) and answers pairwise human-likeness pages for every pair of conditions on one segment.
+Answers follow a stated latent quality per condition:
+
+* MUSHRA: ``50 + 20 q + b_p + e``, clipped to 0..100, with a participant bias ``b_p ~ N(0, 4^2)`` and noise
+  ``e ~ N(0, 9^2)``; the hidden reference ``97 + N(0, 2.5^2)``;
+* pairwise: ``P(tie) = 0.22 exp(-|d|)``, ``P(A) = (1 - P(tie)) / (1 + exp(-1.6 d))`` with ``d = q_A - q_B``.
+
+Every row carries ``data_note`` saying it is simulated.
+"""
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping, Sequence
+from datetime import datetime, timedelta, timezone
+
+import numpy as np
+import pandas as pd
+
+from evalsuite.analysis.io import RESULTS_COLUMNS
+from evalsuite.analysis.simulate import NOTE, _pairwise_answer
+
+__all__ = ["simulate_study"]
+
+
+def simulate_study(quality: Mapping[str, float], segments: Sequence[str], *, participants: int = 16,
+                   seed: int = 0, reference: str = "natural") -> pd.DataFrame:
+    """A results table (``results.csv`` columns) of simulated participants (module docstring)."""
+    if len(quality) < 2 or not segments:
+        raise ValueError("simulate_study needs at least two conditions and one segment")
+    rng = np.random.default_rng(seed)
+    names = list(quality)
+    t0 = datetime(2026, 11, 2, 9, 0, tzinfo=timezone.utc)
+    rows = []
+    for p in range(participants):
+        part, sess = f"SIM{p + 1:02d}", f"S{p + 1:02d}"
+        now = t0 + timedelta(minutes=23 * p)
+        bias = rng.normal(0, 4)
+        trial = 0
+
+        def row(page: str, ptype: str, fields: dict[str, str]) -> None:
+            nonlocal now
+            rows.append({"study": "simulated_demo", "participant": part, "platform": "prolific", "session": sess,
+                         "session_status": "finished", "page": page, "page_type": ptype, "trial": str(trial),
+                         "is_training": "0", "is_attention_check": "0", "attention_expected": "",
+                         "attention_passed": "", "rt_ms": str(int(6000 + rng.integers(0, 20000))),
+                         "shown_at": now.isoformat().replace("+00:00", "Z"),
+                         "answered_at": (now + timedelta(seconds=30)).isoformat().replace("+00:00", "Z"),
+                         **fields})
+
+        for seg in segments:
+            order = list(rng.permutation(names))
+            for slot, c in enumerate(order):
+                q = float(quality[c])
+                v = 97 + rng.normal(0, 2.5) if c == reference else 50 + 20 * q + bias + rng.normal(0, 9)
+                row(f"mushra_{seg}", "mushra", {"question": "human_likeness_rating", "condition": c, "segment": seg,
+                                                "position_a": str(slot), "answer": str(int(np.clip(round(v), 0, 100))),
+                                                "role": "reference" if c == reference else ""})
+            trial += 1
+            now += timedelta(seconds=60)
+        seg = segments[p % len(segments)]
+        for k, (a, b) in enumerate(itertools.combinations(names, 2)):
+            if rng.random() < 0.5:
+                a, b = b, a
+            ans, strength = _pairwise_answer(rng, float(quality[a]), float(quality[b]), False)
+            row(f"pair_{k}", "pairwise", {"question": "human_likeness", "condition_a": a, "condition_b": b,
+                                         "segment": seg, "answer": ans, "strength": strength,
+                                         "position_a": "left" if rng.random() < 0.5 else "right"})
+            trial += 1
+            now += timedelta(seconds=40)
+    df = pd.DataFrame(rows)
+    for col in RESULTS_COLUMNS:
+        if col not in df.columns:
+            df[col] = ""
+    df = df[list(RESULTS_COLUMNS)].fillna("")
+    df["data_note"] = NOTE
+    return df
