@@ -25,6 +25,17 @@ from evalsuite.analysis.simulate import NOTE, _pairwise_answer
 __all__ = ["simulate_study"]
 
 
+def _row(rng: np.random.Generator, t0: datetime, p: int, trial: int, page: str, ptype: str,
+         fields: dict[str, str]) -> dict[str, str]:
+    shown = t0 + timedelta(minutes=23 * p, seconds=45 * trial)
+    return {"study": "simulated_demo", "participant": f"SIM{p + 1:02d}", "platform": "prolific",
+            "session": f"S{p + 1:02d}", "session_status": "finished", "page": page, "page_type": ptype,
+            "trial": str(trial), "is_training": "0", "is_attention_check": "0", "attention_expected": "",
+            "attention_passed": "", "rt_ms": str(int(6000 + rng.integers(0, 20000))),
+            "shown_at": shown.isoformat().replace("+00:00", "Z"),
+            "answered_at": (shown + timedelta(seconds=30)).isoformat().replace("+00:00", "Z"), **fields}
+
+
 def simulate_study(quality: Mapping[str, float], segments: Sequence[str], *, participants: int = 16,
                    seed: int = 0, reference: str = "natural") -> pd.DataFrame:
     """A results table (``results.csv`` columns) of simulated participants (module docstring)."""
@@ -35,41 +46,29 @@ def simulate_study(quality: Mapping[str, float], segments: Sequence[str], *, par
     t0 = datetime(2026, 11, 2, 9, 0, tzinfo=timezone.utc)
     rows = []
     for p in range(participants):
-        part, sess = f"SIM{p + 1:02d}", f"S{p + 1:02d}"
-        now = t0 + timedelta(minutes=23 * p)
         bias = rng.normal(0, 4)
         trial = 0
 
-        def row(page: str, ptype: str, fields: dict[str, str]) -> None:
-            nonlocal now
-            rows.append({"study": "simulated_demo", "participant": part, "platform": "prolific", "session": sess,
-                         "session_status": "finished", "page": page, "page_type": ptype, "trial": str(trial),
-                         "is_training": "0", "is_attention_check": "0", "attention_expected": "",
-                         "attention_passed": "", "rt_ms": str(int(6000 + rng.integers(0, 20000))),
-                         "shown_at": now.isoformat().replace("+00:00", "Z"),
-                         "answered_at": (now + timedelta(seconds=30)).isoformat().replace("+00:00", "Z"),
-                         **fields})
 
         for seg in segments:
             order = list(rng.permutation(names))
             for slot, c in enumerate(order):
                 q = float(quality[c])
                 v = 97 + rng.normal(0, 2.5) if c == reference else 50 + 20 * q + bias + rng.normal(0, 9)
-                row(f"mushra_{seg}", "mushra", {"question": "human_likeness_rating", "condition": c, "segment": seg,
-                                                "position_a": str(slot), "answer": str(int(np.clip(round(v), 0, 100))),
-                                                "role": "reference" if c == reference else ""})
+                fields = {"question": "human_likeness_rating", "condition": c, "segment": seg,
+                          "position_a": str(slot), "answer": str(int(np.clip(round(v), 0, 100))),
+                          "role": "reference" if c == reference else ""}
+                rows.append(_row(rng, t0, p, trial, f"mushra_{seg}", "mushra", fields))
             trial += 1
-            now += timedelta(seconds=60)
         seg = segments[p % len(segments)]
         for k, (a, b) in enumerate(itertools.combinations(names, 2)):
             if rng.random() < 0.5:
                 a, b = b, a
             ans, strength = _pairwise_answer(rng, float(quality[a]), float(quality[b]), False)
-            row(f"pair_{k}", "pairwise", {"question": "human_likeness", "condition_a": a, "condition_b": b,
+            rows.append(_row(rng, t0, p, trial, f"pair_{k}", "pairwise", {"question": "human_likeness", "condition_a": a, "condition_b": b,
                                          "segment": seg, "answer": ans, "strength": strength,
-                                         "position_a": "left" if rng.random() < 0.5 else "right"})
+                                         "position_a": "left" if rng.random() < 0.5 else "right"}))
             trial += 1
-            now += timedelta(seconds=40)
     df = pd.DataFrame(rows)
     for col in RESULTS_COLUMNS:
         if col not in df.columns:

@@ -149,10 +149,10 @@ def analyse(s: DemoSettings, echo: Echo) -> None:
 
 
 def correlate(s: DemoSettings, echo: Echo) -> None:
-    import pandas as pd
-
     import contextlib
     import io
+
+    import pandas as pd
 
     target = s.out / "correlate"
     with contextlib.redirect_stdout(io.StringIO()):  # its full table is in correlations.md
