@@ -87,3 +87,13 @@ def evaluate_condition(folder: str | pathlib.Path, corpus: Corpus, split: str = 
     out["lexical_mean"] = float(np.nanmean(classes)) if np.isfinite(classes).any() else float("nan")
     out["segments"] = len(rows)
     return out
+
+
+def swapped_audio(requests: Sequence[Any]) -> list[Any]:
+    """The requests with each segment's audio replaced by the next segment's (a cyclic derangement; the
+    duration stays the segment's, so features are cropped or padded to it): does a model use the speech?"""
+    import dataclasses
+
+    if len(requests) < 2:
+        raise InputError("swapping audio needs at least two segments")
+    return [dataclasses.replace(r, audio=requests[(i + 1) % len(requests)].audio) for i, r in enumerate(requests)]
