@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from collections.abc import Iterator
 
 from evalsuite.contracts import results as results_contract
 from study_app.model import Study
@@ -65,6 +66,12 @@ def results_csv(study: Study, dump: dict) -> str:
 
 def raw_json(study: Study, dump: dict) -> str:
     """Everything stored for the study: sessions (with platform ids), answers, events, plans."""
+    return "".join(raw_json_chunks(study, dump))
+
+
+def raw_json_chunks(study: Study, dump: dict) -> Iterator[str]:
+    """:func:`raw_json` in pieces: the interaction log is streamed from the database, one event at a
+    time, so that an export never holds every event in memory."""
     def sess(s):
         return {"id": s.id, "participant": s.participant, "platform": s.platform,
                 "platform_data": s.platform_data, "plan": dump["plans"][s.plan_id].key if s.plan_id in dump["plans"] else None,
@@ -72,7 +79,7 @@ def raw_json(study: Study, dump: dict) -> str:
                 "failed_checks": s.failed_checks, "passed_checks": s.passed_checks,
                 "honeypot": s.honeypot, "user_agent": s.user_agent, "created_at": _iso(s.created_at),
                 "finished_at": _iso(s.finished_at)}
-    out = {
+    head = {
         "study": study.id,
         "sessions": [sess(s) for s in dump["sessions"]],
         "answers": [{"session": a.session_id, "page_index": a.page_index, "page": a.page_id,
@@ -80,11 +87,16 @@ def raw_json(study: Study, dump: dict) -> str:
                      "attention_passed": a.attention_passed, "rt_ms": a.rt_ms,
                      "client_rt_ms": a.client_rt_ms, "shown_at": _iso(a.shown_at),
                      "answered_at": _iso(a.answered_at)} for a in dump["answers"]],
-        "events": [{"session": e.session_id, "page_index": e.page_index, "kind": e.kind,
-                    "slot": e.slot, "media_time": e.media_time, "client_ms": e.client_ms,
-                    "detail": e.detail, "server_time": _iso(e.server_time)} for e in dump["events"]],
         "plans": [{"key": p.key, "status": p.status, "session": p.session_id,
                    "reserved_until": _iso(p.reserved_until), "times_released": p.times_released,
                    "pages": p.pages} for p in sorted(dump["plans"].values(), key=lambda p: p.position)],
     }
-    return json.dumps(out, indent=1)
+    text = json.dumps(head, indent=1)
+    yield text[:-2] + ',\n "events": ['
+    sep = "\n  "
+    for e in dump["events"]:
+        yield sep + json.dumps({"session": e.session_id, "page_index": e.page_index, "kind": e.kind,
+                                "slot": e.slot, "media_time": e.media_time, "client_ms": e.client_ms,
+                                "detail": e.detail, "server_time": _iso(e.server_time)})
+        sep = ",\n  "
+    yield "\n ]\n}"

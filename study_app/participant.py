@@ -223,7 +223,16 @@ def answer(sid, index):
     if status == "conflict":
         return jsonify(error="this page was already answered; the stored answer is kept",
                        next=nxt), 409
-    return jsonify(status=status, next=nxt, session_status=sess.status)
+    extra = {}
+    if ans is not None and ans.events_dropped:
+        extra["events_dropped"] = ans.events_dropped
+        extra["warning"] = _cap_message(_store().rules)
+    return jsonify(status=status, next=nxt, session_status=sess.status, **extra)
+
+
+def _cap_message(rules) -> str:
+    return (f"the interaction log is full (at most {rules.events_per_page} events per page and "
+            f"{rules.events_per_session} per session); further events are not recorded")
 
 
 @bp.route("/s/<sid>/draft/<int:index>", methods=["POST"])
@@ -271,5 +280,7 @@ def events(sid, index):
         evs = parse_events(body.get("events"), n_slots(pages[index]))
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
-    store.log_events(sid, index, evs)
+    dropped = store.log_events(sid, index, evs)
+    if dropped:
+        return jsonify(error=_cap_message(store.rules), logged=len(evs) - dropped, dropped=dropped), 413
     return jsonify(logged=len(evs))

@@ -28,6 +28,7 @@ from sqlalchemy import (
     UniqueConstraint,
     create_engine,
     event,
+    func,
     select,
 )
 from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
@@ -102,6 +103,7 @@ class Answer(Base):
     answered_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
     rt_ms: Mapped[int] = mapped_column(Integer)
     client_rt_ms: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    events_dropped = 0      # not stored: new events of this answer the caps left out (told to the client)
 
 
 class PageView(Base):
@@ -338,28 +340,44 @@ class Store:
             view.draft, view.draft_at = draft, utcnow()
             return True
 
-    def add_events(self, db, session_id: str, page_index: int, events: list[dict]):
+    def add_events(self, db, session_id: str, page_index: int, events: list[dict]) -> int:
+        """Store the events not seen before, up to the caps (:class:`~study_app.policy.Rules`
+        ``events_per_page`` and ``events_per_session``); returns how many new events the caps dropped."""
         if not events:
-            return
+            return 0
         ids = [e["id"] for e in events]
         known = set(db.scalars(select(Event.client_id).where(Event.session_id == session_id,
                                                              Event.client_id.in_(ids))))
+        new = []
         for e in events:
             if e["id"] in known:
                 continue  # a retried batch: the log keeps one copy of each event
             known.add(e["id"])
+            new.append(e)
+        if not new:
+            return 0
+        counted = func.count(Event.id)
+        on_page = db.scalar(select(counted).where(Event.session_id == session_id, Event.page_index == page_index))
+        in_session = db.scalar(select(counted).where(Event.session_id == session_id))
+        room = max(0, min(self.rules.events_per_page - on_page, self.rules.events_per_session - in_session))
+        for e in new[:room]:
             db.add(Event(session_id=session_id, client_id=e["id"], page_index=page_index,
                          kind=e["kind"], slot=e.get("slot"), media_time=e.get("t"),
                          client_ms=e.get("ms"), detail=e.get("detail", "")))
+        return max(0, len(new) - room)
 
-    def log_events(self, session_id: str, page_index: int, events: list[dict]):
+    def log_events(self, session_id: str, page_index: int, events: list[dict]) -> int:
+        """Store a batch of events (see :meth:`add_events`); returns how many the caps dropped."""
         for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
-                    self.add_events(db, session_id, page_index, events)
-                return
+                    # The session row is the lock that keeps concurrent batches within the caps.
+                    db.scalars(self._locked(select(ParticipantSession.id).where(
+                        ParticipantSession.id == session_id))).first()
+                    return self.add_events(db, session_id, page_index, events)
             except IntegrityError:
                 continue
+        raise RuntimeError("could not store the events")
 
     def slots_with(self, db, session_id: str, page_index: int, kind: str) -> set[int]:
         return set(db.scalars(select(Event.slot).where(
@@ -399,7 +417,7 @@ class Store:
                         return "conflict", None, sess
                     plan = _plan(db, sess)
                     sub = validate(plan.pages, lambda kind: self.slots_with(db, session_id, page_index, kind))
-                    self.add_events(db, session_id, page_index, sub.events)
+                    dropped = self.add_events(db, session_id, page_index, sub.events)
                     view = db.scalars(select(PageView).where(PageView.session_id == session_id,
                                                              PageView.page_index == page_index)).first()
                     shown = view.shown_at if view else now
@@ -409,6 +427,7 @@ class Store:
                                     rt_ms=max(0, int((now - shown).total_seconds() * 1000)),
                                     client_rt_ms=sub.client_rt_ms)
                     db.add(answer)
+                    answer.events_dropped = dropped     # reported to the client, not stored
                     state = SessionState(sess.current_page, sess.passed_checks, sess.failed_checks)
                     move = after_answer(state, sub.outcome, plan.pages, self.rules)
                     sess.current_page, sess.updated_at = move.current_page, now
@@ -444,6 +463,9 @@ class Store:
     # --- admin / export -------------------------------------------------------------------
 
     def dump(self, study_id: str) -> dict:
+        """Sessions, plans and answers of a study. The interaction log is not loaded: ``events`` is an
+        :class:`EventLog` that streams it from the database when iterated (raw JSON export), and
+        ``event_counts`` the number of events per session, counted in SQL."""
         with self.ReadSession() as db:
             sessions = db.scalars(select(ParticipantSession).where(
                 ParticipantSession.study == study_id).order_by(ParticipantSession.created_at)).all()
@@ -451,7 +473,26 @@ class Store:
             of_study = ParticipantSession.study == study_id
             answers = db.scalars(select(Answer).join(ParticipantSession, Answer.session_id == ParticipantSession.id)
                                  .where(of_study).order_by(Answer.session_id, Answer.page_index)).all()
-            events = db.scalars(select(Event).join(ParticipantSession, Event.session_id == ParticipantSession.id)
-                                .where(of_study).order_by(Event.id)).all()
-            return {"sessions": sessions, "plans": plans, "answers": answers, "events": events}
+            counts = {sid: n for sid, n in db.execute(
+                select(Event.session_id, func.count(Event.id))
+                .join(ParticipantSession, Event.session_id == ParticipantSession.id)
+                .where(of_study).group_by(Event.session_id))}
+            return {"sessions": sessions, "plans": plans, "answers": answers,
+                    "events": EventLog(self, study_id), "event_counts": counts}
 
+
+class EventLog:
+    """A study's interaction log, read from the database in batches each time it is iterated (never all
+    rows at once)."""
+
+    def __init__(self, store: Store, study_id: str, batch: int = 2000):
+        self.store, self.study_id, self.batch = store, study_id, batch
+
+    def __iter__(self):
+        stmt = (select(Event).join(ParticipantSession, Event.session_id == ParticipantSession.id)
+                .where(ParticipantSession.study == self.study_id).order_by(Event.id)
+                .execution_options(yield_per=self.batch))
+        with self.store.ReadSession() as db:
+            for event in db.scalars(stmt):
+                yield event
+                db.expunge(event)

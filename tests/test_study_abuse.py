@@ -1,0 +1,129 @@
+"""Abuse of the study server that the hardening review found (issue 11): event floods, plan exhaustion,
+forged playback. Each test failed on the code before its fix."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+import secrets
+
+import pytest
+import study_helpers as h
+from sqlalchemy import event as sa_event
+
+from study_app import create_app
+from study_app.context import store_of, study_of
+from study_app.storage import Event
+
+
+@pytest.fixture(scope="module")
+def study_dir(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("abuse")
+    h.make_study(folder)
+    return folder
+
+
+@pytest.fixture()
+def app(study_dir, tmp_path):
+    return create_app({"STUDY": str(study_dir / "study.yaml"), "DATABASE_URL": f"sqlite:///{tmp_path / 'a.db'}",
+                       "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
+                       "INSTANCE_PATH": str(tmp_path / "inst")})
+
+
+def _pid(n: int) -> str:
+    """A well-formed Prolific id (24 hex characters)."""
+    return f"{n:024x}"
+
+
+def _entered(app, n=1):
+    p = h.Participant(app.test_client(), _pid(n))
+    assert p.enter().status_code == 302
+    return p
+
+
+def _events(n, kind="seeked"):
+    return [{"id": secrets.token_hex(8), "kind": kind, "slot": None, "t": None, "ms": 1, "detail": ""}
+            for _ in range(n)]
+
+
+def _count_events(app, sid, page=None):
+    with store_of(app).Session() as db:
+        q = db.query(Event).filter_by(session_id=sid)
+        if page is not None:
+            q = q.filter_by(page_index=page)
+        return q.count()
+
+
+# --------------------------------------------------------------------------------------- event caps
+
+def test_events_are_capped_per_page_with_a_clear_413(app):
+    cap = store_of(app).rules.events_per_page
+    p = _entered(app)
+    _, data, csrf = p.page()
+    first = _events(cap - 100)
+    assert p.post(data["events_url"], {"events": first}, csrf).status_code == 200
+    r = p.post(data["events_url"], {"events": _events(300)}, csrf)
+    assert r.status_code == 413
+    body = r.get_json()
+    assert "per page" in body["error"]
+    assert (body["logged"], body["dropped"]) == (100, 200)
+    assert _count_events(app, p.sid) == cap
+    r = p.post(data["events_url"], {"events": _events(5)}, csrf)
+    assert r.status_code == 413
+    assert r.get_json()["logged"] == 0
+    assert _count_events(app, p.sid) == cap
+    # a replayed batch is not new: nothing to refuse
+    assert p.post(data["events_url"], {"events": first[:50]}, csrf).status_code == 200
+    # the answer is still taken (never blocked by the log), its extra events are not stored
+    r = p.submit(data, csrf, {"agree": True, "website": ""}, events=_events(10, "visible"))
+    assert r.status_code == 200
+    assert r.get_json()["events_dropped"] == 10
+    assert _count_events(app, p.sid) == cap
+
+
+def test_events_are_capped_per_session(app):
+    store = store_of(app)
+    store.rules = dataclasses.replace(store.rules, events_per_page=50, events_per_session=80)
+    rng = __import__("numpy").random.default_rng(0)
+    p = _entered(app, 2)
+    _, data, csrf = p.page()
+    assert p.post(data["events_url"], {"events": _events(50)}, csrf).status_code == 200
+    spec = h.plan_pages(app, p.sid)[data["index"]]
+    assert p.submit(data, csrf, h.make_answer(study_of(app), spec, rng)).status_code == 200
+    _, data, csrf = p.page()
+    r = p.post(data["events_url"], {"events": _events(45)}, csrf)
+    assert r.status_code == 413
+    assert "per session" in r.get_json()["error"]
+    assert _count_events(app, p.sid) == 80
+    assert _count_events(app, p.sid, data["index"]) == 30
+
+
+def _selects_of_event_rows(app, fn):
+    """Run ``fn`` and return the SQL statements that read rows (not aggregates) of the events table."""
+    engine = store_of(app).engine
+    seen = []
+
+    def hook(conn, cursor, statement, params, context, executemany):
+        s = statement.lower()
+        if re.search(r"\bfrom events\b", s) and "count(" not in s:
+            seen.append(statement)
+
+    sa_event.listen(engine, "before_cursor_execute", hook)
+    try:
+        fn()
+    finally:
+        sa_event.remove(engine, "before_cursor_execute", hook)
+    return seen
+
+
+def test_admin_page_and_results_export_do_not_load_the_interaction_log(app):
+    rng = __import__("numpy").random.default_rng(1)
+    p, _ = h.run_participant(app, app.test_client(), _pid(3), rng)
+    admin = app.test_client()
+    auth = {"Authorization": f"Bearer {h.ADMIN}"}
+    assert _selects_of_event_rows(app, lambda: admin.get("/admin/", headers=auth)) == []
+    assert _selects_of_event_rows(app, lambda: admin.get("/admin/export/results.csv", headers=auth)) == []
+    # the raw JSON still has the whole log (streamed in batches), and is valid JSON
+    raw = json.loads(admin.get("/admin/export/raw.json", headers=auth).get_data(as_text=True))
+    assert len(raw["events"]) == _count_events(app, p.sid) > 0
+    assert {e["kind"] for e in raw["events"]} == {"ended"}
