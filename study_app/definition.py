@@ -244,6 +244,9 @@ def load_study(path) -> Study:
         release_failed=chk.get(data, "release_failed", "", bool, default=True),
         prolific_study_id=chk.get(data, "prolific_study_id", "", str, default=""),
         redirect_seconds=chk.int_range(data, "redirect_seconds", "", 0, 3600, default=0),
+        new_sessions_per_address=chk.int_range(data, "new_sessions_per_address", "", 0, 1_000_000, default=10),
+        new_sessions_window_minutes=float(chk.int_range(data, "new_sessions_window_minutes", "", 1, 525_600,
+                                                        default=60)),
         sha256=hashlib.sha256(raw).hexdigest(),
     )
     if study.reservation_minutes <= 0:
@@ -266,7 +269,8 @@ def load_study(path) -> Study:
 TOP_LEVEL_KEYS = ("id", "title", "stimuli", "platform", "sessions", "seed", "completion_code",
                   "failure_code", "max_failed_attention_checks", "reservation_minutes",
                   "require_full_playback", "min_width", "block_mobile", "resume", "release_failed",
-                  "prolific_study_id", "redirect_seconds", "pages")
+                  "prolific_study_id", "redirect_seconds", "new_sessions_per_address",
+                  "new_sessions_window_minutes", "pages")
 def _load_page(chk: Checker, page, where: str, study: Study) -> Page:
     kinds = page_kinds()
     if not isinstance(page, dict):

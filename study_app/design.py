@@ -107,6 +107,23 @@ def build_plans(study: Study) -> dict:
             "manifest_sha256": study.manifest.sha256, "plans": plans}
 
 
+def entry_pages(plans: dict) -> list[dict] | None:
+    """The pages a session shows before it holds a plan, or None.
+
+    When the first page is the same in every plan (a consent page, instructions, a questionnaire), a session
+    starts without a plan and reserves one when that page is answered (``study_app.storage``): visitors who
+    never start do not hold a plan. The list returned is the first plan's pages, of which only the first is
+    ever shown before the reservation.
+    """
+    items = plans["plans"]
+    if not items or not items[0]["pages"]:
+        return None
+    first = items[0]["pages"][0]
+    if any(not p["pages"] or p["pages"][0] != first for p in items):
+        return None
+    return items[0]["pages"]
+
+
 def plans_digest(plans: dict) -> str:
     return hashlib.sha256(json.dumps(plans["plans"], sort_keys=True).encode()).hexdigest()
 

@@ -72,6 +72,9 @@ class Study:
     release_failed: bool = True
     prolific_study_id: str = ""
     redirect_seconds: int = 0
+    # At most this many new sessions per client address within the window (0: no limit).
+    new_sessions_per_address: int = 10
+    new_sessions_window_minutes: float = 60.0
     sha256: str = ""
 
     @property

@@ -134,6 +134,17 @@ class Event(Base):
     server_time: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
 
 
+class Entry(Base):
+    """A session created from a client address (a keyed hash of it, never the address itself): the limit
+    on new sessions per address counts these."""
+    __tablename__ = "session_entries"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    study: Mapped[str] = mapped_column(String(64), index=True)
+    address: Mapped[str] = mapped_column(String(64), index=True)
+    session_id: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow, index=True)
+
+
 # ------------------------------------------------------------------------------- engine
 
 def make_engine(url: str):
@@ -200,7 +211,7 @@ def init_db(engine, study, plans: dict):
 
 
 def _plan(db, sess: ParticipantSession) -> Plan:
-    """The plan a session holds (every session is created with one)."""
+    """The plan a session holds."""
     plan = db.get(Plan, sess.plan_id)
     if plan is None:
         raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
@@ -210,10 +221,13 @@ def _plan(db, sess: ParticipantSession) -> Plan:
 class Store:
     """All database operations of the app; each method is one transaction."""
 
-    def __init__(self, engine, rules: Rules | None = None):
-        """``rules``: the study's session policy settings (:class:`study_app.policy.Rules`)."""
+    def __init__(self, engine, rules: Rules | None = None, entry_pages: list[dict] | None = None):
+        """``rules``: the study's session policy settings (:class:`study_app.policy.Rules`);
+        ``entry_pages``: what a session without a plan shows (:func:`study_app.design.entry_pages`; None:
+        every session reserves its plan when it is created)."""
         self.engine = engine
         self.rules = rules or Rules()
+        self.entry_pages = entry_pages
         self.Session = sessionmaker(engine, expire_on_commit=False)
         # For reads only: never writes, so on SQLite it does not take the write lock.
         self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
@@ -237,15 +251,17 @@ class Store:
             plan.times_released += 1
 
     def start_session(self, study, participant: str, platform: str, platform_data: dict,
-                      user_agent: str):
-        """Create a session and reserve a plan for it.
+                      user_agent: str, address: str = ""):
+        """Create a session for a participant id (or find theirs).
 
-        Returns ``(session, created)``; when the participant already has a session for this
-        study it is returned unchanged (``created`` False) so the caller resumes or refuses.
-        Returns ``(None, False)`` when no plan is free.
+        Returns ``(session, state)``: ``"existing"`` (the participant already has a session for this study,
+        returned unchanged so that the caller resumes or refuses), ``"created"``, ``"full"`` (no plan is
+        free; nothing created) or ``"throttled"`` (``address``, a keyed hash of the client address, created
+        ``study.new_sessions_per_address`` sessions within the window; nothing created). A new session holds
+        no plan when the store has ``entry_pages``: it reserves one when its first page is answered
+        (:meth:`submit`); otherwise the plan is reserved now.
         """
         now = utcnow()
-        until = now + dt.timedelta(minutes=study.reservation_minutes)
         for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
@@ -254,30 +270,73 @@ class Store:
                         ParticipantSession.participant == participant)).first()
                     if existing is not None:
                         self._check_expiry(db, existing, now)
-                        return existing, False
+                        return existing, "existing"
+                    limit = study.new_sessions_per_address
+                    if limit and address and self.recent_entries(db, study, address, now)[0] >= limit:
+                        return None, "throttled"
                     self.release_expired(db, study.id, now)
-                    stmt = (select(Plan).where(Plan.study == study.id, Plan.status == "free")
-                            .order_by(Plan.position).limit(1))
-                    if self.is_postgres:
-                        stmt = stmt.with_for_update(skip_locked=True)
-                    plan = db.scalars(stmt).first()
+                    plan = self._free_plan(db, study.id)
                     if plan is None:
-                        return None, False
+                        return None, "full"
                     sess = ParticipantSession(
                         id=secrets.token_urlsafe(18), study=study.id, participant=participant,
-                        platform=platform, platform_data=platform_data, plan_id=plan.id,
+                        platform=platform, platform_data=platform_data, plan_id=None,
                         user_agent=user_agent[:1000], created_at=now, updated_at=now)
                     db.add(sess)
                     db.flush()
-                    plan.status, plan.session_id, plan.reserved_until = "reserved", sess.id, until
-                return sess, True
+                    if address:
+                        db.add(Entry(study=study.id, address=address, session_id=sess.id, created_at=now))
+                    if self.entry_pages is None:
+                        self._reserve(db, sess, plan, now)
+                return sess, "created"
             except IntegrityError:
                 # Same participant entering twice at the same moment: the other request won.
                 continue
         raise RuntimeError("could not start a session")
 
+    def recent_entries(self, db, study, address: str, now: dt.datetime) -> tuple[int, int]:
+        """(sessions created from ``address`` within the study's window, seconds until the oldest of them
+        leaves the window)."""
+        since = now - dt.timedelta(minutes=study.new_sessions_window_minutes)
+        n, oldest = db.execute(select(func.count(Entry.id), func.min(Entry.created_at)).where(
+            Entry.study == study.id, Entry.address == address, Entry.created_at >= since)).one()
+        wait = 0 if oldest is None else max(1, int((oldest - since).total_seconds()) + 1)
+        return int(n), wait
+
+    def retry_after(self, study, address: str) -> int:
+        """Seconds until ``address`` may create a session again."""
+        with self.ReadSession() as db:
+            return self.recent_entries(db, study, address, utcnow())[1]
+
+    def _free_plan(self, db, study_id: str) -> Plan | None:
+        stmt = (select(Plan).where(Plan.study == study_id, Plan.status == "free")
+                .order_by(Plan.position).limit(1))
+        if self.is_postgres:
+            stmt = stmt.with_for_update(skip_locked=True)
+        return db.scalars(stmt).first()
+
+    def _reserve(self, db, sess: ParticipantSession, plan: Plan, now: dt.datetime) -> None:
+        sess.plan_id = plan.id
+        plan.status, plan.session_id = "reserved", sess.id
+        plan.reserved_until = now + dt.timedelta(minutes=self.rules.reservation_minutes)
+
+    def has_free_plan(self, study_id: str) -> bool:
+        """Whether a new participant could get a plan now (a free one, or one whose reservation ran out)."""
+        now = utcnow()
+        with self.ReadSession() as db:
+            return db.scalar(select(Plan.id).where(Plan.study == study_id, (Plan.status == "free") | (
+                (Plan.status == "reserved") & (Plan.reserved_until < now))).limit(1)) is not None
+
+    def _pages(self, db, sess: ParticipantSession) -> list[dict]:
+        """The pages a session shows: its plan's, or the entry pages while it holds no plan."""
+        if sess.plan_id is None:
+            if self.entry_pages is None:
+                raise StudyStateError(f"session {sess.id} holds no plan and this study has no entry pages")
+            return self.entry_pages
+        return _plan(db, sess).pages
+
     def _check_expiry(self, db, sess, now):
-        if sess.status != "active":
+        if sess.status != "active" or sess.plan_id is None:
             return
         plan = db.get(Plan, sess.plan_id)
         if plan is not None and plan.status == "reserved" and plan.reserved_until < now:
@@ -291,7 +350,7 @@ class Store:
             if sess is None:
                 return None, None
             self._check_expiry(db, sess, now)
-            return sess, _plan(db, sess).pages
+            return sess, self._pages(db, sess)
 
     def read_session(self, session_id: str):
         """(session, plan pages) without touching reservations (read-only, no lock)."""
@@ -299,7 +358,7 @@ class Store:
             sess = db.get(ParticipantSession, session_id)
             if sess is None:
                 return None, None
-            return sess, _plan(db, sess).pages
+            return sess, self._pages(db, sess)
 
     def view_current_page(self, session_id: str):
         """One transaction for a page view: the session, its plan, the current page's first-view
@@ -311,7 +370,7 @@ class Store:
             if sess is None:
                 return None
             self._check_expiry(db, sess, now)
-            pages = _plan(db, sess).pages
+            pages = self._pages(db, sess)
             view = None
             played: dict[str, set] = {"play": set(), "ended": set()}
             if sess.status == "active":
@@ -392,8 +451,8 @@ class Store:
         event of that kind on the page. The session then moves on as :func:`study_app.policy.after_answer`
         says. Returns ``(status, answer, session)`` with status ``"stored"``, ``"duplicate"`` (same token
         seen before: the first answer is returned), ``"ahead"`` (a page after the current one), ``"missing"``
-        (no such session) or ``"conflict"`` (this page already has a different
-        answer / is not the current page).
+        (no such session), ``"conflict"`` (this page already has a different answer / is not the current
+        page) or ``"full"`` (a session without a plan answered its first page and no plan is free).
         """
         for attempt in range(3):
             try:
@@ -415,6 +474,14 @@ class Store:
                         return "ahead", None, sess
                     if sess.status != "active" or sess.current_page != page_index:
                         return "conflict", None, sess
+                    if sess.plan_id is None:
+                        # The participant really starts (answers the first page, e.g. gives consent): only
+                        # now is a plan reserved. Rolled back with the answer if the answer is refused.
+                        self.release_expired(db, sess.study, now)
+                        free = self._free_plan(db, sess.study)
+                        if free is None:
+                            return "full", None, sess
+                        self._reserve(db, sess, free, now)
                     plan = _plan(db, sess)
                     sub = validate(plan.pages, lambda kind: self.slots_with(db, session_id, page_index, kind))
                     dropped = self.add_events(db, session_id, page_index, sub.events)

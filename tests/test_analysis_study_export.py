@@ -53,6 +53,6 @@ def test_study_app_export_is_analysed(tmp_path):
     mismatch = pd.read_csv(out / "mismatch.csv", keep_default_na=False)
     assert set(mismatch["condition"]) == {"SYSALPHA", "SYSBETA"}
     excl = pd.read_csv(out / "exclusions.csv", keep_default_na=False)
-    assert set(excl.loc[excl["participant"] == "pfail0001", "reason"]) == {"session_failed", "attention_checks"}
+    assert set(excl.loc[excl["participant"] == h.valid_pid("pfail0001"), "reason"]) == {"session_failed", "attention_checks"}
     assert (out / "ratings.csv").is_file()
     assert (out / "likert_means.csv").is_file()

@@ -127,3 +127,107 @@ def test_admin_page_and_results_export_do_not_load_the_interaction_log(app):
     raw = json.loads(admin.get("/admin/export/raw.json", headers=auth).get_data(as_text=True))
     assert len(raw["events"]) == _count_events(app, p.sid) > 0
     assert {e["kind"] for e in raw["events"]} == {"ended"}
+
+
+# --------------------------------------------------------------------------------- plan exhaustion
+
+def _free_plans(app):
+    from study_app.storage import Plan
+    with store_of(app).Session() as db:
+        return db.query(Plan).filter_by(status="free").count()
+
+
+def _from(app, address):
+    client = app.test_client()
+    client.environ_base["REMOTE_ADDR"] = address
+    return client
+
+
+def test_visitors_who_never_start_hold_no_plan(app):
+    n_plans = _free_plans(app)
+    for i in range(20):            # cookie-less requests with made-up (well-formed) ids, each from its own address
+        r = _from(app, f"10.0.0.{i}").get(h.prolific_url(_pid(1000 + i)))
+        assert r.status_code == 302
+    assert _free_plans(app) == n_plans
+    # a real participant still gets a place, reserved when they give consent
+    p = _entered(app, 5)
+    assert _free_plans(app) == n_plans
+    assert p.consent().status_code == 200
+    assert _free_plans(app) == n_plans - 1
+    # ... and resumes from the same browser, or with the same Prolific SESSION_ID from another one
+    assert p.enter().status_code == 302
+    again = h.Participant(app.test_client(), _pid(5))
+    assert again.enter().status_code == 302
+    assert again.sid == p.sid
+    _, data, _ = again.page()
+    assert data["index"] == 1
+
+
+def test_a_window_too_narrow_reserves_nothing(app):
+    n_plans = _free_plans(app)
+    p = _entered(app, 6)
+    _, data, csrf = p.page()
+    r = p.post(data["answer_url"], {"token": "tok-narrow-01", "answer": {"agree": True, "website": ""},
+                                    "width": 500}, csrf)
+    assert r.status_code == 422
+    assert "800 pixels" in r.get_json()["error"]
+    assert _free_plans(app) == n_plans
+
+
+def test_when_every_plan_is_taken_consent_says_study_full(app):
+    n_plans = _free_plans(app)
+    waiting = _entered(app, 7)                  # reads the consent page while the others take every place
+    for i in range(n_plans):
+        p = _entered(app, 100 + i)
+        assert p.consent().status_code == 200
+    _, data, csrf = waiting.page()
+    assert data is None                          # the page itself says so now
+    r = waiting.client.post(f"/s/{waiting.sid}/answer/0", json={"token": "tok-full-0001", "answer": {
+        "agree": True, "website": ""}}, headers={"X-CSRFToken": _csrf_of(waiting)})
+    assert r.status_code == 409
+    assert "All places" in r.get_json()["error"]
+    r = waiting.client.get(r.get_json()["next"])
+    assert r.status_code == 503
+    assert "All places" in r.get_data(as_text=True)
+    # a newcomer is told at once
+    r = h.Participant(app.test_client(), _pid(999)).enter()
+    assert r.status_code == 503
+
+
+def _csrf_of(p):
+    m = re.search(r'name="csrf_token" value="([^"]+)"', p.client.get("/admin/login").get_data(as_text=True))
+    assert m is not None
+    return m.group(1)
+
+
+def test_new_sessions_per_client_address_are_limited(app):
+    study = study_of(app)
+    limit = study.new_sessions_per_address
+    assert limit == 10                                   # the documented default
+    for i in range(limit):
+        assert _from(app, "192.0.2.7").get(h.prolific_url(_pid(200 + i))).status_code == 302
+    r = _from(app, "192.0.2.7").get(h.prolific_url(_pid(300)))
+    assert r.status_code == 429
+    assert "Too many" in r.get_data(as_text=True)
+    assert 0 < int(r.headers["Retry-After"]) <= 3600
+    # nothing was created for the refused one, other addresses are not affected, and resuming is not a new session
+    from study_app.storage import ParticipantSession
+    with store_of(app).Session() as db:
+        assert db.query(ParticipantSession).filter_by(participant=_pid(300)).count() == 0
+    assert _from(app, "192.0.2.8").get(h.prolific_url(_pid(300))).status_code == 302
+    assert _from(app, "192.0.2.7").get(h.prolific_url(_pid(200))).status_code == 302
+
+
+def test_the_limit_is_configured_in_the_study(tmp_path):
+    text = h.STUDY_YAML.format(sessions=4).replace("min_width: 800", "min_width: 800\nnew_sessions_per_address: 2\n"
+                                                   "new_sessions_window_minutes: 5")
+    path = h.make_study(tmp_path, yaml_text=text)
+    app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{tmp_path / 'l.db'}", "SECRET_KEY": h.SECRET,
+                      "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False, "INSTANCE_PATH": str(tmp_path / "i")})
+    assert [_from(app, "192.0.2.9").get(h.prolific_url(_pid(i))).status_code for i in range(3)] == [302, 302, 429]
+    bad = text.replace("new_sessions_per_address: 2", "new_sessions_per_address: -1")
+    from study_app.definition import load_study
+    from study_app.errors import StudyDefinitionError
+    (tmp_path / "bad.yaml").write_text(bad)
+    with pytest.raises(StudyDefinitionError, match="new_sessions_per_address"):
+        load_study(tmp_path / "bad.yaml")
