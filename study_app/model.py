@@ -24,6 +24,7 @@ class Stimulus:
     expected: str = ""              # attention checks: the answer an attentive participant gives
     motion_segment: str = ""        # mismatched stimuli: the segment the motion comes from
     block: str = ""                 # attention checks: restrict to this block id
+    duration_s: float | None = None  # the clip's length (optional column; else read from the file)
     line: int = 0
 
     @property
@@ -75,6 +76,8 @@ class Study:
     # At most this many new sessions per client address within the window (0: no limit).
     new_sessions_per_address: int = 10
     new_sessions_window_minutes: float = 60.0
+    # A page is flagged when its time is below this fraction of its longest clip (study_app.playback).
+    playback_min_fraction: float = 0.5
     sha256: str = ""
 
     @property

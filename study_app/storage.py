@@ -134,6 +134,18 @@ class Event(Base):
     server_time: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
 
 
+class MediaRequest(Base):
+    """A media slot of a page that the session fetched from the server (first time): the server's own
+    evidence of playback (:mod:`study_app.playback`)."""
+    __tablename__ = "media_requests"
+    __table_args__ = (UniqueConstraint("session_id", "page_index", "slot"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
+    page_index: Mapped[int] = mapped_column(Integer)
+    slot: Mapped[int] = mapped_column(Integer)
+    first_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
 class Entry(Base):
     """A session created from a client address (a keyed hash of it, never the address itself): the limit
     on new sessions per address counts these."""
@@ -228,6 +240,7 @@ class Store:
         self.engine = engine
         self.rules = rules or Rules()
         self.entry_pages = entry_pages
+        self._requested: set[tuple[str, int, int]] = set()     # media requests known to be recorded
         self.Session = sessionmaker(engine, expire_on_commit=False)
         # For reads only: never writes, so on SQLite it does not take the write lock.
         self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
@@ -438,6 +451,25 @@ class Store:
                 continue
         raise RuntimeError("could not store the events")
 
+    def record_media_request(self, session_id: str, page_index: int, slot: int) -> None:
+        """Note that the session fetched this media slot (once; later requests only hit a memory set)."""
+        key = (session_id, page_index, slot)
+        if key in self._requested:
+            return
+        with self.ReadSession() as db:
+            known = db.scalar(select(MediaRequest.id).where(
+                MediaRequest.session_id == session_id, MediaRequest.page_index == page_index,
+                MediaRequest.slot == slot)) is not None
+        if not known:
+            try:
+                with self.Session.begin() as db:
+                    db.add(MediaRequest(session_id=session_id, page_index=page_index, slot=slot))
+            except IntegrityError:
+                pass        # a concurrent request (another range of the same video) recorded it
+        if len(self._requested) > 200_000:
+            self._requested.clear()
+        self._requested.add(key)
+
     def slots_with(self, db, session_id: str, page_index: int, kind: str) -> set[int]:
         return set(db.scalars(select(Event.slot).where(
             Event.session_id == session_id, Event.page_index == page_index,
@@ -532,7 +564,8 @@ class Store:
     def dump(self, study_id: str) -> dict:
         """Sessions, plans and answers of a study. The interaction log is not loaded: ``events`` is an
         :class:`EventLog` that streams it from the database when iterated (raw JSON export), and
-        ``event_counts`` the number of events per session, counted in SQL."""
+        ``event_counts`` the number of events per session, counted in SQL; ``media_requests`` maps
+        (session, page index) to the media slots the session fetched."""
         with self.ReadSession() as db:
             sessions = db.scalars(select(ParticipantSession).where(
                 ParticipantSession.study == study_id).order_by(ParticipantSession.created_at)).all()
@@ -544,8 +577,13 @@ class Store:
                 select(Event.session_id, func.count(Event.id))
                 .join(ParticipantSession, Event.session_id == ParticipantSession.id)
                 .where(of_study).group_by(Event.session_id))}
+            requested: dict[tuple[str, int], set[int]] = {}
+            for sid, index, slot in db.execute(
+                    select(MediaRequest.session_id, MediaRequest.page_index, MediaRequest.slot)
+                    .join(ParticipantSession, MediaRequest.session_id == ParticipantSession.id).where(of_study)):
+                requested.setdefault((sid, index), set()).add(slot)
             return {"sessions": sessions, "plans": plans, "answers": answers,
-                    "events": EventLog(self, study_id), "event_counts": counts}
+                    "events": EventLog(self, study_id), "event_counts": counts, "media_requests": requested}
 
 
 class EventLog:

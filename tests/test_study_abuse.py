@@ -231,3 +231,108 @@ def test_the_limit_is_configured_in_the_study(tmp_path):
     (tmp_path / "bad.yaml").write_text(bad)
     with pytest.raises(StudyDefinitionError, match="new_sessions_per_address"):
         load_study(tmp_path / "bad.yaml")
+
+
+# ------------------------------------------------------------------------------- forged playback
+
+def _walk(app, pid, rng, fetch: bool, dwell: float = 0.0):
+    """A scripted participant: posts 'ended' for every video; fetches them (``fetch``) and stays ``dwell``
+    seconds on pages with media, or not."""
+    import time
+    study = study_of(app)
+    p = _entered(app, pid)
+    while True:
+        r, data, csrf = p.page()
+        if data is None:
+            return p, r
+        spec = h.plan_pages(app, p.sid)[data["index"]]
+        if fetch:
+            for url in data["videos"]:
+                assert p.client.get(url).status_code == 200
+        if data["videos"] and dwell:
+            time.sleep(dwell)
+        assert p.submit(data, csrf, h.make_answer(study, spec, rng)).status_code == 200
+
+
+def test_forged_playback_is_flagged_in_the_export_and_excluded_by_analyze(tmp_path):
+    import csv
+    import io
+
+    from click.testing import CliRunner
+
+    from evalsuite.cli import main
+    from study_app.playback import probe_seconds
+
+    text = h.STUDY_YAML.format(sessions=4).replace("min_width: 800", "min_width: 800\nplayback_min_fraction: 0.2")
+    path = h.make_study(tmp_path, yaml_text=text)
+    app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{tmp_path / 'p.db'}", "SECRET_KEY": h.SECRET,
+                      "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False, "INSTANCE_PATH": str(tmp_path / "i")})
+    study = study_of(app)
+    clip = study.manifest.stimuli[0].file
+    assert probe_seconds(study.manifest.root / clip) == pytest.approx(1.0, abs=0.05)    # 1 s sample clips
+    rng = __import__("numpy").random.default_rng(7)
+    bot, r = _walk(app, 11, rng, fetch=False)                # never requests a video, answers at once
+    assert "DONE1234" in r.get_data(as_text=True)              # the browser's word was taken: it finished
+    hasty, _ = _walk(app, 12, rng, fetch=True)               # fetches every video but answers at once
+    honest, _ = _walk(app, 13, rng, fetch=True, dwell=0.25)  # fetches and stays >= 0.2 x the 1 s clips
+
+    auth = {"Authorization": f"Bearer {h.ADMIN}"}
+    export = app.test_client().get("/admin/export/results.csv", headers=auth).get_data(as_text=True)
+    rows = list(csv.DictReader(io.StringIO(export)))
+    flags = {}
+    for row in rows:
+        flags.setdefault(row["session"], set()).add(row["playback_implausible"])
+    assert flags == {bot.sid: {"1"}, hasty.sid: {"1"}, honest.sid: {"0"}}
+    raw = json.loads(app.test_client().get("/admin/export/raw.json", headers=auth).get_data(as_text=True))
+    bot_pages = [a["playback"] for a in raw["answers"] if a["session"] == bot.sid and a["playback"]]
+    assert bot_pages and all(pb["implausible"] and pb["not_requested"] for pb in bot_pages)
+    hasty_pages = [a["playback"] for a in raw["answers"] if a["session"] == hasty.sid and a["playback"]]
+    assert all(pb["not_requested"] == [] and pb["min_ms"] == 200 for pb in hasty_pages if pb["min_ms"])
+
+    results = tmp_path / "results.csv"
+    results.write_text(export)
+    out = tmp_path / "analysis"
+    res = CliRunner().invoke(main, ["analyze", str(results), "-o", str(out), "--no-figures", "--bootstrap", "0",
+                                    "--no-mushra-screening"])
+    assert res.exit_code == 0, res.output
+    import pandas as pd
+    excl = pd.read_csv(out / "exclusions.csv", keep_default_na=False)
+    assert set(excl.loc[excl["reason"] == "implausible_playback", "session"]) == {bot.sid, hasty.sid}
+    report = (out / "report.html").read_text()
+    assert "implausible_playback" in report
+    assert "exclude at &gt;= 1 flagged pages (2 sessions flagged)" in report
+    # the rule can be switched off: then nobody is excluded for it
+    res = CliRunner().invoke(main, ["analyze", str(results), "-o", str(tmp_path / "a2"), "--no-figures",
+                                    "--bootstrap", "0", "--no-mushra-screening", "--implausible-playback", "off"])
+    assert res.exit_code == 0, res.output
+    excl = pd.read_csv(tmp_path / "a2" / "exclusions.csv", keep_default_na=False)
+    assert "implausible_playback" not in set(excl["reason"])
+
+
+def test_playback_judgement_rules():
+    from study_app.playback import check_playback
+
+    ok = check_playback(2, {0, 1}, [4.0, 6.0], rt_ms=3000, min_fraction=0.5, full_playback=True)
+    assert (ok.implausible, ok.min_ms) == (False, 3000)
+    assert check_playback(2, {0, 1}, [4.0, 6.0], rt_ms=2999, min_fraction=0.5, full_playback=True).implausible
+    missing = check_playback(2, {1}, [4.0, 6.0], rt_ms=60_000, min_fraction=0.5, full_playback=True)
+    assert (missing.implausible, missing.not_requested) == (True, (0,))
+    # without full playback only the request is checked; unknown durations likewise
+    assert not check_playback(2, {0, 1}, [4.0, 6.0], rt_ms=10, min_fraction=0.5, full_playback=False).implausible
+    assert not check_playback(2, {0, 1}, [None, None], rt_ms=10, min_fraction=0.5, full_playback=True).implausible
+
+
+def test_wav_and_manifest_durations(tmp_path):
+    import wave
+
+    from study_app.playback import probe_seconds
+
+    with wave.open(str(tmp_path / "t.wav"), "wb") as w:
+        w.setnchannels(2)
+        w.setsampwidth(2)
+        w.setframerate(8000)
+        w.writeframes(b"\0\0\0\0" * 12000)
+    assert probe_seconds(tmp_path / "t.wav") == pytest.approx(1.5)
+    (tmp_path / "junk.mp4").write_bytes(b"\0\0\0\x08free" + secrets.token_bytes(100))
+    assert probe_seconds(tmp_path / "junk.mp4") is None
+    assert probe_seconds(tmp_path / "missing.mp4") is None

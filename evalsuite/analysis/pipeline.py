@@ -31,6 +31,7 @@ class AnalysisOptions:
     keep_incomplete: bool = False
     duplicates: str = "keep-first"
     mushra_screening: bool = True
+    implausible_playback: int = 1
     zero_method: str = "wilcox"
     n_boot: int = 1000
     seed: int = 42
@@ -76,7 +77,8 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
         echo("Blind analysis: condition names are replaced by codes (B01, ...); run with --reveal to unblind.")
 
     excl = apply_exclusions(raw, attention_fails=opt.attention_fails, keep_incomplete=opt.keep_incomplete,
-                            duplicates=opt.duplicates, mushra_screening=opt.mushra_screening)
+                            duplicates=opt.duplicates, mushra_screening=opt.mushra_screening,
+                            implausible_playback=opt.implausible_playback)
     res.exclusions = excl
     data = excl.data
     s = excl.summary
@@ -178,6 +180,8 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
         ("attention checks", "exclude on any failure" if opt.attention_fails == 1
          else f"exclude at >= {opt.attention_fails} failures"),
         ("BS.1534-3 post-screening", "on" if opt.mushra_screening else "off"),
+        ("implausible playback", (f"exclude at >= {opt.implausible_playback} flagged pages" if opt.implausible_playback
+                                  else "off") + f" ({s['sessions_with_implausible_playback']} sessions flagged)"),
         ("bootstrap", f"{opt.n_boot} participant resamples, seed {opt.seed}"),
     ], columns=["setting", "value"])
     head = []
