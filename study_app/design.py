@@ -15,7 +15,9 @@
 * MUSHRA pages rotate the slot order (each condition in each slot equally often);
 * attention-check pages are inserted at the block positions the definition names (never
   position 0), training pages where the definition places them, flagged and excluded from
-  analysis;
+  analysis; a training page never shows material the participant rates for real (the same
+  stimuli, e.g. the same pair on the same segment on either side): it takes the next balanced
+  page whose material the session's rated pages do not use;
 * a ``headphone_check`` page gets its own shuffled tone orders per session (the quiet tone in
   each position equally often, see :mod:`study_app.headphones`);
 * ``mismatched: true`` pairwise blocks pair each condition's matched video with its
@@ -69,12 +71,17 @@ class _Lookup:
 
 
 class _PlanBuilder:
-    """What page kinds need to expand a definition page: the study, the stimulus lookup, the kinds."""
+    """What page kinds need to expand a definition page: the study, the stimulus lookup, the kinds, and
+    (for practice pages) the material the session rates for real."""
 
     def __init__(self, study: Study):
         self.study = study
         self.lookup = _Lookup(study)
         self.kind = get_block_kind
+        self.rated: set[frozenset[str]] = set()     # material of the current session's rated pages
+
+    def material(self, spec: dict) -> frozenset[str]:
+        return get_block_kind(spec["type"]).material(self.study, spec)
 
 
 def build_plans(study: Study) -> dict:
@@ -86,10 +93,10 @@ def build_plans(study: Study) -> dict:
     check_counter: Counter = Counter()
     plans = []
     for s in range(study.sessions):
-        pages = []
+        # Rated pages first: practice pages (placed before them) must use other material.
+        rated: dict[str, list[dict]] = {}
         for page in study.pages:
             if not get_kind(page.type).block:
-                pages.extend(get_kind(page.type).plan_pages(page, s, builder))
                 continue
             kind = kinds[page.id]
             k = page.cfg["pages"]
@@ -99,9 +106,16 @@ def build_plans(study: Study) -> dict:
             for pos in page.cfg["attention_checks"]:
                 ordered.insert(pos, kind.check_page(page, check_counter[page.id], pools[page.id], builder.lookup))
                 check_counter[page.id] += 1
-            for j, p in enumerate(ordered):
-                pages.append({"page": f"{page.id}-{j + 1:02d}", "block": page.id, "training": False,
-                              "check": bool(p.pop("check", False) or "check_slot" in p), **p})
+            rated[page.id] = [{"page": f"{page.id}-{j + 1:02d}", "block": page.id, "training": False,
+                               "check": bool(p.pop("check", False) or "check_slot" in p), **p}
+                              for j, p in enumerate(ordered)]
+        builder.rated = {builder.material(p) for block_pages in rated.values() for p in block_pages}
+        pages = []
+        for page in study.pages:
+            if get_kind(page.type).block:
+                pages.extend(rated[page.id])
+            else:
+                pages.extend(get_kind(page.type).plan_pages(page, s, builder))
         plans.append({"key": f"plan-{s:04d}", "pages": pages})
     return {"format": PLANS_FORMAT, "study": study.id, "definition_sha256": study.sha256,
             "manifest_sha256": study.manifest.sha256, "plans": plans}

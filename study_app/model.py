@@ -87,6 +87,12 @@ class Study:
 
         return {p.id: p for p in self.pages if get_kind(p.type).block}
 
+    def kind_of(self, page: Page):
+        """The registered page kind of a definition page (:mod:`study_app.pages`)."""
+        from study_app.pages import get_kind
+
+        return get_kind(page.type)
+
     def page(self, page_id: str) -> Page:
         for p in self.pages:
             if p.id == page_id:

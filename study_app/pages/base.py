@@ -150,6 +150,11 @@ class BlockKind(PageKind):
     def balance(self, spec: dict, by_file: dict, counts: dict) -> None:
         """Add this trial page to the balance counts (``counts``: name -> Counter)."""
 
+    def material(self, study: Study, spec: dict) -> frozenset[str]:
+        """What a page shows, regardless of order or side: the set of its media files. A practice page
+        must not show the material of a page the participant rates for real."""
+        return frozenset(f for k in range(self.n_slots(spec)) if (f := self.media(study, spec, k).file))
+
     def page_data(self, study: Study, spec: dict, cfg: dict) -> dict:
         return {"training": bool(spec.get("training")), "muted": cfg["muted"]}
 
