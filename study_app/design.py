@@ -13,8 +13,9 @@
 * the order of a session's block pages is a row of a Williams balanced Latin square (each
   page in each position equally often, first-order carry-over balanced);
 * MUSHRA pages rotate the slot order (each condition in each slot equally often);
-* attention-check pages are inserted at the block positions the definition names (never
-  position 0), training pages where the definition places them, flagged and excluded from
+* attention-check pages are inserted near the block positions the definition names: each
+  session moves each check by up to ``attention_window`` pages (default 2; seeded per session
+  from the study's seed), never to position 0; training pages where the definition places them, flagged and excluded from
   analysis; a training page never shows material the participant rates for real (the same
   stimuli, e.g. the same pair on the same segment on either side): it takes the next balanced
   page whose material the session's rated pages do not use;
@@ -30,6 +31,7 @@ from __future__ import annotations
 import hashlib
 import json
 import pathlib
+import random
 from collections import Counter
 
 from study_app.errors import StudyDefinitionError
@@ -103,9 +105,13 @@ def build_plans(study: Study) -> dict:
             regular = [kind.regular_page(page, s * k + j, builder.lookup, page.cfg["segments"]) for j in range(k)]
             rows = williams_rows(k)
             ordered = [regular[i] for i in rows[s % len(rows)]]
-            for pos in page.cfg["attention_checks"]:
-                ordered.insert(pos, kind.check_page(page, check_counter[page.id], pools[page.id], builder.lookup))
-                check_counter[page.id] += 1
+            rng = session_rng(study.seed, page.id, s)
+            checks = [kind.session_check_page(page, check_counter[page.id] + i, pools[page.id], builder.lookup,
+                                              ordered, rng) for i in range(len(page.cfg["attention_checks"]))]
+            check_counter[page.id] += len(checks)
+            for pos, check in zip(check_positions(page.cfg["attention_checks"], k, page.cfg["attention_window"],
+                                                  rng), checks):
+                ordered.insert(pos, check)
             rated[page.id] = [{"page": f"{page.id}-{j + 1:02d}", "block": page.id, "training": False,
                                "check": bool(p.pop("check", False) or "check_slot" in p), **p}
                               for j, p in enumerate(ordered)]
@@ -119,6 +125,24 @@ def build_plans(study: Study) -> dict:
         plans.append({"key": f"plan-{s:04d}", "pages": pages})
     return {"format": PLANS_FORMAT, "study": study.id, "definition_sha256": study.sha256,
             "manifest_sha256": study.manifest.sha256, "plans": plans}
+
+
+def session_rng(seed: int, block_id: str, session: int) -> random.Random:
+    """A generator for one session and block, seeded from the study's seed (the same plans on every build)."""
+    digest = hashlib.sha256(f"evalsuite-plan|{seed}|{block_id}|{session}".encode()).digest()
+    return random.Random(int.from_bytes(digest[:8], "big"))
+
+
+def check_positions(configured: list[int], n_pages: int, window: int, rng: random.Random) -> list[int]:
+    """Where a session's attention checks go in a block of ``n_pages`` trial pages: each configured position
+    moved by up to ``window`` pages (uniformly), never to position 0, in order, none past the block's end.
+    Returned as insertion indices, in order (the ``i``-th check ends up at its index)."""
+    out: list[int] = []
+    for i, p in enumerate(configured):
+        lo = max(1, p - window, out[-1] + 1 if out else 1)
+        hi = min(n_pages + i, p + window)
+        out.append(rng.randint(lo, max(lo, hi)))
+    return out
 
 
 def entry_pages(plans: dict) -> list[dict] | None:

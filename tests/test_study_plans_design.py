@@ -86,3 +86,60 @@ def test_practice_without_material_of_its_own_is_a_build_error(folder):
     with pytest.raises(StudyDefinitionError, match="no practice material left") as err:
         build_plans(study)
     assert "pages[5].segments" in str(err.value)
+
+
+def _checks(plan, block):
+    pages = [p for p in plan["pages"] if p.get("block") == block and not p["training"]]
+    return pages, [i for i, p in enumerate(pages) if p["check"]]
+
+
+def test_attention_checks_move_within_a_window_per_session(folder):
+    study = _variant(folder, lambda d: None, "window.yaml")
+    plans = build_plans(study)
+    assert build_plans(study) == plans                           # seeded: the same plans on every build
+    for block, configured in (("hl", 2), ("ratings", 1)):
+        seen = Counter()
+        for plan in plans["plans"]:
+            _, at = _checks(plan, block)
+            assert len(at) == 1
+            assert at[0] != 0
+            assert abs(at[0] - configured) <= 2
+            seen[at[0]] += 1
+        assert len(seen) >= 2, (block, seen)                    # not the same place in every plan
+        assert set(seen) == set(range(max(1, configured - 2), min(configured + 2, 3 if block == "hl" else 2) + 1))
+    # another seed, other places; a window of 0 keeps the configured positions
+    other = _variant(folder, lambda d: d.update(seed=4), "seed4.yaml")
+    assert [_checks(p, "hl")[1] for p in build_plans(other)["plans"]] != [_checks(p, "hl")[1] for p in plans["plans"]]
+    fixed = _variant(folder, lambda d: next(p for p in d["pages"] if p["id"] == "ratings").update(attention_window=0),
+                     "fixed.yaml")
+    assert {tuple(_checks(p, "ratings")[1]) for p in build_plans(fixed)["plans"]} == {(1,)}
+
+
+def test_mushra_check_is_not_a_rated_page_with_one_clip_swapped(folder):
+    study = _variant(folder, lambda d: None, "mushra.yaml")
+    pool_segments = {s.segment for s in study.manifest.stimuli if s.kind == "attention"
+                     and get_block_kind("mushra").attention_fits(s, study.page("ratings").cfg)}
+    slots, repeats, avoidable = Counter(), 0, 0
+    for plan in build_plans(study)["plans"]:
+        pages, at = _checks(plan, "ratings")
+        check = pages[at[0]]
+        rated = [p for p in pages if not p["check"]]
+        slots[check["check_slot"]] += 1
+        assert check["roles"][check["check_slot"]] == ""         # never in place of the hidden reference
+        others = set(check["slots"]) - {check["slots"][check["check_slot"]]}
+        repeat = any(others <= set(p["slots"]) for p in rated)
+        repeats += repeat
+        if pool_segments - {p["segment"] for p in rated}:
+            avoidable += 1
+            assert not repeat                                    # a segment this participant does not rate
+    assert avoidable > 0
+    assert repeats == 60 - avoidable
+    assert len(slots) == 3                                       # the check clip in every non-reference slot
+
+
+def test_attention_window_is_validated(folder):
+    def bad(data):
+        next(p for p in data["pages"] if p["id"] == "hl")["attention_window"] = -1
+
+    with pytest.raises(StudyDefinitionError, match=r"attention_window"):
+        _variant(folder, bad, "badwindow.yaml")
