@@ -142,7 +142,7 @@ def start(study_id):
         if sess.status == "expired":
             return _message("Time expired", "Your place in this study has expired and the study "
                             "cannot be started again.", 409)
-        if not study.resume:
+        if not study.resume and sess.plan_id is not None:      # (without a plan it has not started yet)
             return _message("Already started", "You have already started this study; it cannot be "
                             "started again.", 409)
         if not _may_resume(sess, platform_data):

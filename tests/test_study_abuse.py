@@ -336,3 +336,36 @@ def test_wav_and_manifest_durations(tmp_path):
     (tmp_path / "junk.mp4").write_bytes(b"\0\0\0\x08free" + secrets.token_bytes(100))
     assert probe_seconds(tmp_path / "junk.mp4") is None
     assert probe_seconds(tmp_path / "missing.mp4") is None
+
+
+def test_concurrent_consents_share_out_the_last_plans_exactly(tmp_path):
+    import threading
+
+    from study_app.storage import Answer, ParticipantSession, Plan
+
+    path = h.make_study(tmp_path, sessions=2)
+    app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{tmp_path / 'c.db'}", "SECRET_KEY": h.SECRET,
+                      "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False, "INSTANCE_PATH": str(tmp_path / "i")})
+    people = [_entered(app, 400 + i) for i in range(6)]
+    pages = [p.page() for p in people]
+    codes: list[int] = []
+    barrier = threading.Barrier(len(people))
+
+    def consent(p, page):
+        _, data, csrf = page
+        barrier.wait()
+        codes.append(p.submit(data, csrf, {"agree": True, "website": ""}).status_code)
+
+    threads = [threading.Thread(target=consent, args=(p, pg)) for p, pg in zip(people, pages)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(codes) == [200, 200, 409, 409, 409, 409]
+    with store_of(app).Session() as db:
+        plans = db.query(Plan).all()
+        assert {p.status for p in plans} == {"reserved"}
+        holders = {p.session_id for p in plans}
+        assert len(holders) == 2
+        assert {a.session_id for a in db.query(Answer).all()} == holders      # answer and plan together
+        assert {s.id for s in db.query(ParticipantSession).filter(ParticipantSession.plan_id.isnot(None))} == holders

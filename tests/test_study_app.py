@@ -327,7 +327,11 @@ def test_resume_disabled_refuses_reentry(study_dir, sqlite_url):
     st = load_study(study_dir / "noresume.yaml")
     write_plans(build_plans(st), default_plans_path(st))
     app = make_app(study_dir, sqlite_url, study_file="noresume.yaml")
+    first = h.Participant(app.test_client(), "pnores001", "gesture-noresume")
+    assert first.enter().status_code == 302
+    # opening the link again before starting (consent) is not a restart
     assert h.Participant(app.test_client(), "pnores001", "gesture-noresume").enter().status_code == 302
+    assert first.consent().status_code == 200
     r = h.Participant(app.test_client(), "pnores001", "gesture-noresume").enter()
     assert r.status_code == 409
     assert "already started" in r.get_data(as_text=True)
