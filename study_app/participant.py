@@ -275,7 +275,8 @@ def answer(sid, index):
 
 def _cap_message(rules) -> str:
     return (f"the interaction log is full (at most {rules.events_per_page} events per page and "
-            f"{rules.events_per_session} per session); further events are not recorded")
+            f"{rules.events_per_session} per session, play/ended and the others each); further events are "
+            "not recorded")
 
 
 @bp.route("/s/<sid>/draft/<int:index>", methods=["POST"])

@@ -38,6 +38,8 @@ from study_app.design import plans_digest
 from study_app.errors import StudyStateError
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
 
+PLAYBACK_KINDS = ("play", "ended")     # the events the server's playback check reads
+
 
 def utcnow() -> dt.datetime:
     return dt.datetime.now(dt.timezone.utc).replace(tzinfo=None)
@@ -414,7 +416,8 @@ class Store:
 
     def add_events(self, db, session_id: str, page_index: int, events: list[dict]) -> int:
         """Store the events not seen before, up to the caps (:class:`~study_app.policy.Rules`
-        ``events_per_page`` and ``events_per_session``); returns how many new events the caps dropped."""
+        ``events_per_page`` and ``events_per_session``, each for playback events and for the others);
+        returns how many new events the caps dropped."""
         if not events:
             return 0
         ids = [e["id"] for e in events]
@@ -428,15 +431,26 @@ class Store:
             new.append(e)
         if not new:
             return 0
-        counted = func.count(Event.id)
-        on_page = db.scalar(select(counted).where(Event.session_id == session_id, Event.page_index == page_index))
-        in_session = db.scalar(select(counted).where(Event.session_id == session_id))
-        room = max(0, min(self.rules.events_per_page - on_page, self.rules.events_per_session - in_session))
-        for e in new[:room]:
+        # Playback events (play, ended: what the server's playback check reads) and the rest are capped
+        # apart, so that a long slider drag can never crowd out the record that a video was played.
+        playback = Event.kind.in_(PLAYBACK_KINDS)
+        room = {}
+        for group, where in ((True, playback), (False, ~playback)):
+            counted = select(func.count(Event.id)).where(Event.session_id == session_id, where)
+            on_page = db.scalar(counted.where(Event.page_index == page_index))
+            in_session = db.scalar(counted)
+            room[group] = max(0, min(self.rules.events_per_page - on_page, self.rules.events_per_session - in_session))
+        dropped = 0
+        for e in new:
+            group = e["kind"] in PLAYBACK_KINDS
+            if not room[group]:
+                dropped += 1
+                continue
+            room[group] -= 1
             db.add(Event(session_id=session_id, client_id=e["id"], page_index=page_index,
                          kind=e["kind"], slot=e.get("slot"), media_time=e.get("t"),
                          client_ms=e.get("ms"), detail=e.get("detail", "")))
-        return max(0, len(new) - room)
+        return dropped
 
     def log_events(self, session_id: str, page_index: int, events: list[dict]) -> int:
         """Store a batch of events (see :meth:`add_events`); returns how many the caps dropped."""

@@ -74,11 +74,15 @@ def test_events_are_capped_per_page_with_a_clear_413(app):
     assert _count_events(app, p.sid) == cap
     # a replayed batch is not new: nothing to refuse
     assert p.post(data["events_url"], {"events": first[:50]}, csrf).status_code == 200
+    # playback events are counted apart: a flood of others never keeps out the record of a played video
+    r = p.post(data["events_url"], {"events": _events(3, "ended")}, csrf)
+    assert r.status_code == 200
+    assert _count_events(app, p.sid) == cap + 3
     # the answer is still taken (never blocked by the log), its extra events are not stored
     r = p.submit(data, csrf, {"agree": True, "website": ""}, events=_events(10, "visible"))
     assert r.status_code == 200
     assert r.get_json()["events_dropped"] == 10
-    assert _count_events(app, p.sid) == cap
+    assert _count_events(app, p.sid) == cap + 3
 
 
 def test_events_are_capped_per_session(app):
