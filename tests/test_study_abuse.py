@@ -373,3 +373,33 @@ def test_concurrent_consents_share_out_the_last_plans_exactly(tmp_path):
         assert len(holders) == 2
         assert {a.session_id for a in db.query(Answer).all()} == holders      # answer and plan together
         assert {s.id for s in db.query(ParticipantSession).filter(ParticipantSession.plan_id.isnot(None))} == holders
+
+
+@pytest.mark.postgres
+def test_media_requests_and_plan_reservation_on_postgresql(study_dir, tmp_path):
+    from study_app.storage import MediaRequest, Plan
+    from study_app.testing import create_database, throwaway_postgres
+
+    with throwaway_postgres() as server:
+        app = create_app({"STUDY": str(study_dir / "study.yaml"), "DATABASE_URL": create_database(server, "abuse"),
+                          "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
+                          "INSTANCE_PATH": str(tmp_path / "inst")})
+        rng = __import__("numpy").random.default_rng(3)
+        p = _entered(app, 21)
+        store = store_of(app)
+        with store.Session() as db:
+            assert db.query(Plan).filter_by(status="reserved").count() == 0
+        while True:
+            _, data, csrf = p.page()
+            if data["videos"]:
+                break
+            spec = h.plan_pages(app, p.sid)[data["index"]]
+            assert p.submit(data, csrf, h.make_answer(study_of(app), spec, rng)).status_code == 200
+        for url in data["videos"] * 2:                        # twice: recorded once
+            assert p.client.get(url).status_code == 200
+        store._requested.clear()                              # as in another server process
+        assert p.client.get(data["videos"][0]).status_code == 200
+        with store.Session() as db:
+            assert db.query(Plan).filter_by(status="reserved").count() == 1
+            assert db.query(MediaRequest).filter_by(session_id=p.sid).count() == len(data["videos"])
+        store.engine.dispose()
