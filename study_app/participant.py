@@ -273,10 +273,12 @@ def answer(sid, index):
     return jsonify(status=status, next=nxt, session_status=sess.status, **extra)
 
 
-def _cap_message(rules) -> str:
-    return (f"the interaction log is full (at most {rules.events_per_page} events per page and "
-            f"{rules.events_per_session} per session, play/ended and the others each); further events are "
-            "not recorded")
+def _cap_message(rules, which: str = "") -> str:
+    what = {"page": f"of this page is full (at most {rules.events_per_page} events per page",
+            "session": f"of this session is full (at most {rules.events_per_session} events per session"}.get(
+        which, f"is full (at most {rules.events_per_page} events per page and {rules.events_per_session} per "
+        "session")
+    return f"the interaction log {what}, play/ended and the others each); further events are not recorded"
 
 
 @bp.route("/s/<sid>/draft/<int:index>", methods=["POST"])
@@ -324,7 +326,7 @@ def events(sid, index):
         evs = parse_events(body.get("events"), n_slots(pages[index]))
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
-    dropped = store.log_events(sid, index, evs)
+    dropped, which = store.log_events(sid, index, evs)
     if dropped:
-        return jsonify(error=_cap_message(store.rules), logged=len(evs) - dropped, dropped=dropped), 413
+        return jsonify(error=_cap_message(store.rules, which), logged=len(evs) - dropped, dropped=dropped), 413
     return jsonify(logged=len(evs))

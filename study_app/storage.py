@@ -418,12 +418,12 @@ class Store:
             view.draft, view.draft_at = draft, utcnow()
             return True
 
-    def add_events(self, db, session_id: str, page_index: int, events: list[dict]) -> int:
+    def add_events(self, db, session_id: str, page_index: int, events: list[dict]) -> tuple[int, str]:
         """Store the events not seen before, up to the caps (:class:`~study_app.policy.Rules`
         ``events_per_page`` and ``events_per_session``, each for playback events and for the others);
-        returns how many new events the caps dropped."""
+        returns how many new events the caps dropped and which cap (``"page"``/``"session"``, else "")."""
         if not events:
-            return 0
+            return 0, ""
         ids = [e["id"] for e in events]
         known = set(db.scalars(select(Event.client_id).where(Event.session_id == session_id,
                                                              Event.client_id.in_(ids))))
@@ -434,30 +434,32 @@ class Store:
             known.add(e["id"])
             new.append(e)
         if not new:
-            return 0
+            return 0, ""
         # Playback events (play, ended: what the server's playback check reads) and the rest are capped
         # apart, so that a long slider drag can never crowd out the record that a video was played.
         playback = Event.kind.in_(PLAYBACK_KINDS)
-        room = {}
+        room, limit = {}, {}
         for group, where in ((True, playback), (False, ~playback)):
             counted = select(func.count(Event.id)).where(Event.session_id == session_id, where)
-            on_page = db.scalar(counted.where(Event.page_index == page_index))
-            in_session = db.scalar(counted)
-            room[group] = max(0, min(self.rules.events_per_page - on_page, self.rules.events_per_session - in_session))
-        dropped = 0
+            page_room = self.rules.events_per_page - db.scalar(counted.where(Event.page_index == page_index))
+            session_room = self.rules.events_per_session - db.scalar(counted)
+            room[group] = max(0, min(page_room, session_room))
+            limit[group] = "session" if session_room < page_room else "page"
+        dropped, which = 0, ""
         for e in new:
             group = e["kind"] in PLAYBACK_KINDS
             if not room[group]:
                 dropped += 1
+                which = limit[group]
                 continue
             room[group] -= 1
             db.add(Event(session_id=session_id, client_id=e["id"], page_index=page_index,
                          kind=e["kind"], slot=e.get("slot"), media_time=e.get("t"),
                          client_ms=e.get("ms"), detail=e.get("detail", "")))
-        return dropped
+        return dropped, which
 
-    def log_events(self, session_id: str, page_index: int, events: list[dict]) -> int:
-        """Store a batch of events (see :meth:`add_events`); returns how many the caps dropped."""
+    def log_events(self, session_id: str, page_index: int, events: list[dict]) -> tuple[int, str]:
+        """Store a batch of events (see :meth:`add_events`); returns how many the caps dropped, and which."""
         for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
@@ -572,7 +574,7 @@ class Store:
                         self._reserve(db, sess, free, now)
                     plan = _plan(db, sess)
                     sub = validate(plan.pages, lambda kind: self.slots_with(db, session_id, page_index, kind))
-                    dropped = self.add_events(db, session_id, page_index, sub.events)
+                    dropped, _ = self.add_events(db, session_id, page_index, sub.events)
                     view = db.scalars(select(PageView).where(PageView.session_id == session_id,
                                                              PageView.page_index == page_index)).first()
                     shown = view.shown_at if view else now

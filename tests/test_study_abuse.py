@@ -65,7 +65,7 @@ def test_events_are_capped_per_page_with_a_clear_413(app):
     r = p.post(data["events_url"], {"events": _events(300)}, csrf)
     assert r.status_code == 413
     body = r.get_json()
-    assert "per page" in body["error"]
+    assert "of this page is full (at most 1000 events per page" in body["error"]
     assert (body["logged"], body["dropped"]) == (100, 200)
     assert _count_events(app, p.sid) == cap
     r = p.post(data["events_url"], {"events": _events(5)}, csrf)
@@ -97,7 +97,7 @@ def test_events_are_capped_per_session(app):
     _, data, csrf = p.page()
     r = p.post(data["events_url"], {"events": _events(45)}, csrf)
     assert r.status_code == 413
-    assert "per session" in r.get_json()["error"]
+    assert "of this session is full (at most 80 events per session" in r.get_json()["error"]
     assert _count_events(app, p.sid) == 80
     assert _count_events(app, p.sid, data["index"]) == 30
 
