@@ -8,17 +8,7 @@ from __future__ import annotations
 
 from collections import Counter
 
-from flask import (
-    Blueprint,
-    Response,
-    current_app,
-    redirect,
-    render_template,
-    request,
-    session,
-    stream_with_context,
-    url_for,
-)
+from flask import Blueprint, Response, current_app, redirect, render_template, request, session, url_for
 
 from study_app.context import get_store, get_study
 from study_app.export import raw_json_chunks, result_rows, results_csv
@@ -91,6 +81,7 @@ def export_csv():
 @admin_required
 def export_json():
     study, store = get_study(), get_store()
-    return Response(stream_with_context(raw_json_chunks(study, store.dump(study.id))), mimetype="application/json",
+    # streamed: the interaction log is read from the database in batches while the response is sent
+    return Response(raw_json_chunks(study, store.dump(study.id)), mimetype="application/json",
                     headers={"Content-Disposition": f'attachment; filename="{study.id}-raw.json"'})
 
