@@ -13,6 +13,7 @@ from sqlalchemy import event as sa_event
 
 from study_app import create_app
 from study_app.context import store_of, study_of
+from study_app.errors import StudyStateError
 from study_app.storage import Event
 
 
@@ -403,3 +404,20 @@ def test_media_requests_and_plan_reservation_on_postgresql(study_dir, tmp_path):
             assert db.query(Plan).filter_by(status="reserved").count() == 1
             assert db.query(MediaRequest).filter_by(session_id=p.sid).count() == len(data["videos"])
         store.engine.dispose()
+
+
+def test_behind_a_trusted_proxy_the_limit_counts_forwarded_addresses(study_dir, tmp_path):
+    def app_with(proxies, name):
+        return create_app({"STUDY": str(study_dir / "study.yaml"), "DATABASE_URL": f"sqlite:///{tmp_path / name}",
+                           "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
+                           "INSTANCE_PATH": str(tmp_path / "inst"), "TRUSTED_PROXIES": proxies})
+
+    def enter(app, n, forwarded):
+        return app.test_client().get(h.prolific_url(_pid(n)), headers={"X-Forwarded-For": forwarded}).status_code
+
+    trusting = app_with(1, "t.db")
+    assert [enter(trusting, 500 + i, f"198.51.100.{i}") for i in range(12)] == [302] * 12
+    untrusting = app_with(0, "u.db")                 # every client seems to be the proxy itself
+    assert [enter(untrusting, 600 + i, f"198.51.100.{i}") for i in range(11)] == [302] * 10 + [429]
+    with pytest.raises(StudyStateError, match="TRUSTED_PROXIES"):
+        app_with(-1, "x.db")
