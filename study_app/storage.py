@@ -13,9 +13,7 @@ PostgreSQL by URL. Guarantees:
 from __future__ import annotations
 
 import datetime as dt
-import logging
 import secrets
-import sqlite3
 import time
 
 from sqlalchemy import (
@@ -32,16 +30,15 @@ from sqlalchemy import (
     event,
     func,
     select,
-    text,
 )
-from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError, ProgrammingError
+from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
 from study_app.design import plans_digest
 from study_app.errors import StudyStateError
+from study_app.media_log import MediaLog
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
 
-log = logging.getLogger(__name__)
 PLAYBACK_KINDS = ("play", "ended")     # the events the server's playback check reads
 
 
@@ -246,8 +243,8 @@ class Store:
         self.engine = engine
         self.rules = rules or Rules()
         self.entry_pages = entry_pages
-        self._requested: set[tuple[str, int, int]] = set()     # media requests known to be recorded
         self.Session = sessionmaker(engine, expire_on_commit=False)
+        self.media_log = MediaLog(engine, self.Session, MediaRequest)
         # For reads only: never writes, so on SQLite it does not take the write lock.
         self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
                                         expire_on_commit=False)
@@ -472,61 +469,9 @@ class Store:
         raise RuntimeError("could not store the events")
 
     def record_media_request(self, session_id: str, page_index: int, slot: int) -> None:
-        """Note that the session fetched this media slot (once; later requests only hit a memory set).
-
-        Not an acknowledged answer, so it is written without waiting for the disk: on SQLite with
-        ``synchronous=NORMAL`` for this one transaction (WAL: it survives a crash of the server, not of the
-        machine), on PostgreSQL with ``synchronous_commit`` off. A video request costs well under a
-        millisecond of database time instead of an fsync."""
-        key = (session_id, page_index, slot)
-        if key in self._requested:
-            return
-        values = {"session_id": session_id, "page_index": page_index, "slot": slot, "first_at": utcnow()}
-        try:
-            if self.engine.dialect.name == "sqlite":
-                self._sqlite_quick_insert(values)
-            elif self.is_postgres:
-                from sqlalchemy.dialects.postgresql import insert as pg_insert
-                with self.Session.begin() as db:
-                    db.execute(text("SET LOCAL synchronous_commit TO OFF"))
-                    db.execute(pg_insert(MediaRequest).values(**values).on_conflict_do_nothing())
-            else:
-                try:
-                    with self.Session.begin() as db:
-                        db.add(MediaRequest(**values))
-                except IntegrityError:
-                    pass        # a concurrent request (another range of the same video) recorded it
-        except (DBAPIError, sqlite3.Error) as exc:
-            # The video is served all the same; a later request of it records it.
-            log.warning("could not record a media request of session %s: %s", session_id, exc)
-            return
-        if len(self._requested) > 200_000:
-            self._requested.clear()
-        self._requested.add(key)
-
-    def _sqlite_quick_insert(self, values: dict) -> None:
-        raw = self.engine.raw_connection()
-        ok = False
-        try:
-            cur = raw.cursor()
-            cur.execute("PRAGMA synchronous=NORMAL")      # only outside a transaction
-            try:
-                cur.execute("BEGIN IMMEDIATE")
-                cur.execute("INSERT OR IGNORE INTO media_requests (session_id, page_index, slot, first_at) "
-                            "VALUES (?, ?, ?, ?)", (values["session_id"], values["page_index"], values["slot"],
-                                                    values["first_at"].strftime("%Y-%m-%d %H:%M:%S.%f")))
-                cur.execute("COMMIT")
-            except Exception:
-                cur.execute("ROLLBACK")
-                raise
-            finally:
-                cur.execute("PRAGMA synchronous=FULL")
-                ok = True
-            cur.close()
-        finally:
-            if not ok:
-                raw.invalidate()          # never hand a connection with the weaker setting back to the pool
-            raw.close()
+        """Note that the session fetched this media slot (:class:`study_app.media_log.MediaLog`: once, without
+        waiting for the disk or, on SQLite, for the write lock)."""
+        self.media_log.record(session_id, page_index, slot, utcnow())
 
     def slots_with(self, db, session_id: str, page_index: int, kind: str) -> set[int]:
         return set(db.scalars(select(Event.slot).where(
@@ -624,6 +569,7 @@ class Store:
         :class:`EventLog` that streams it from the database when iterated (raw JSON export), and
         ``event_counts`` the number of events per session, counted in SQL; ``media_requests`` maps
         (session, page index) to the media slots the session fetched."""
+        self.media_log.flush()
         with self.ReadSession() as db:
             sessions = db.scalars(select(ParticipantSession).where(
                 ParticipantSession.study == study_id).order_by(ParticipantSession.created_at)).all()

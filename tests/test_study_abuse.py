@@ -398,7 +398,7 @@ def test_media_requests_and_plan_reservation_on_postgresql(study_dir, tmp_path):
             assert p.submit(data, csrf, h.make_answer(study_of(app), spec, rng)).status_code == 200
         for url in data["videos"] * 2:                        # twice: recorded once
             assert p.client.get(url).status_code == 200
-        store._requested.clear()                              # as in another server process
+        store.media_log.recorded.clear()                      # as in another server process
         assert p.client.get(data["videos"][0]).status_code == 200
         with store.Session() as db:
             assert db.query(Plan).filter_by(status="reserved").count() == 1
@@ -421,3 +421,28 @@ def test_behind_a_trusted_proxy_the_limit_counts_forwarded_addresses(study_dir, 
     assert [enter(untrusting, 600 + i, f"198.51.100.{i}") for i in range(11)] == [302] * 10 + [429]
     with pytest.raises(StudyStateError, match="TRUSTED_PROXIES"):
         app_with(-1, "x.db")
+
+
+def test_a_video_request_does_not_wait_for_the_sqlite_write_lock(app):
+    import time
+
+    from study_app.storage import MediaRequest
+
+    store = store_of(app)
+    p = _entered(app, 31)
+    blocker = store.engine.raw_connection()
+    cur = blocker.dbapi_connection.cursor()
+    cur.execute("BEGIN IMMEDIATE")                    # another writer holds the lock (e.g. an answer's fsync)
+    try:
+        start = time.perf_counter()
+        store.record_media_request(p.sid, 0, 0)
+        assert time.perf_counter() - start < 1.0      # queued, not waiting (the busy timeout is 60 s)
+    finally:
+        cur.execute("ROLLBACK")
+        blocker.close()
+    store.dump(study_of(app).id)                       # exports write this process's queue first
+    with store.Session() as db:
+        assert db.query(MediaRequest).filter_by(session_id=p.sid, page_index=0, slot=0).count() == 1
+    store.record_media_request(p.sid, 0, 1)            # uncontended: written at once
+    with store.Session() as db:
+        assert db.query(MediaRequest).filter_by(session_id=p.sid).count() == 2
