@@ -272,6 +272,9 @@ def load_study(path) -> Study:
         code = getattr(study, key)
         if code and not re.match(r"^[A-Za-z0-9_-]{1,64}$", code):
             chk.fail(key, f"expected letters, digits, '_' or '-' (at most 64), got {code!r}")
+    if study.prolific_study_id and not re.match(r"^[0-9a-fA-F]{24}$", study.prolific_study_id):
+        chk.fail("prolific_study_id", f"expected a Prolific study id (24 hexadecimal characters), got "
+                 f"{study.prolific_study_id!r}")
     if platform in ("prolific", "mturk") and not study.completion_code:
         chk.fail("completion_code", f"missing; expected the completion code for {platform}")
     pages = chk.get(data, "pages", "", list, required=True, expected="a list of pages")

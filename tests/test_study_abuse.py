@@ -224,18 +224,20 @@ def test_new_sessions_per_client_address_are_limited(app):
 
 
 def test_the_limit_is_configured_in_the_study(tmp_path):
+    from study_app.definition import load_study
+    from study_app.errors import StudyDefinitionError
+
     text = h.STUDY_YAML.format(sessions=4).replace("min_width: 800", "min_width: 800\nnew_sessions_per_address: 2\n"
                                                    "new_sessions_window_minutes: 5")
     path = h.make_study(tmp_path, yaml_text=text)
     app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{tmp_path / 'l.db'}", "SECRET_KEY": h.SECRET,
                       "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False, "INSTANCE_PATH": str(tmp_path / "i")})
     assert [_from(app, "192.0.2.9").get(h.prolific_url(_pid(i))).status_code for i in range(3)] == [302, 302, 429]
-    bad = text.replace("new_sessions_per_address: 2", "new_sessions_per_address: -1")
-    from study_app.definition import load_study
-    from study_app.errors import StudyDefinitionError
-    (tmp_path / "bad.yaml").write_text(bad)
-    with pytest.raises(StudyDefinitionError, match="new_sessions_per_address"):
-        load_study(tmp_path / "bad.yaml")
+    for change, message in (("new_sessions_per_address: -1", "new_sessions_per_address"),
+                            ("prolific_study_id: st1", "24 hexadecimal")):    # an id no link could match
+        (tmp_path / "bad.yaml").write_text(text.replace("new_sessions_per_address: 2", change))
+        with pytest.raises(StudyDefinitionError, match=message):
+            load_study(tmp_path / "bad.yaml")
 
 
 # ------------------------------------------------------------------------------- forged playback
