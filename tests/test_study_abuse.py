@@ -308,12 +308,14 @@ def test_forged_playback_is_flagged_in_the_export_and_excluded_by_analyze(tmp_pa
     report = (out / "report.html").read_text()
     assert "implausible_playback" in report
     assert "exclude at &gt;= 1 flagged pages (2 sessions flagged)" in report
+    assert "2 sessions have pages with implausible playback" in report
     # the rule can be switched off: then nobody is excluded for it
     res = CliRunner().invoke(main, ["analyze", str(results), "-o", str(tmp_path / "a2"), "--no-figures",
                                     "--bootstrap", "0", "--no-mushra-screening", "--implausible-playback", "off"])
     assert res.exit_code == 0, res.output
     excl = pd.read_csv(tmp_path / "a2" / "exclusions.csv", keep_default_na=False)
     assert "implausible_playback" not in set(excl["reason"])
+    assert "the rule is off" in (tmp_path / "a2" / "report.html").read_text()
 
 
 def test_playback_judgement_rules():

@@ -196,6 +196,11 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
           f"({s['participants_included']} participants, {s['rows_analysed']} judgements). "
           f"Removed rows: {s['training_rows_removed']} training, "
           f"{s['attention_check_rows_removed']} attention-check trials.</p>"]
+    if s["sessions_with_implausible_playback"]:
+        ex.append(f"<p>{s['sessions_with_implausible_playback']} sessions have pages with implausible playback "
+                  "(media never fetched, or answered faster than the clips last); "
+                  + ("they are excluded (implausible_playback)." if opt.implausible_playback else
+                     "the rule is off (--implausible-playback), so they are analysed.") + "</p>")
     if s["reasons"]:
         ex.append(report.html_table(pd.DataFrame(sorted(s["reasons"].items()), columns=["reason", "sessions"])))
     ex.append(report.html_table(T["exclusions"]) if not T["exclusions"].empty else "<p>Nobody was excluded.</p>")
