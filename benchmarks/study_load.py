@@ -60,6 +60,7 @@ platform: prolific
 completion_code: LOADDONE
 sessions: {sessions}
 reservation_minutes: 100
+new_sessions_per_address: 0      # every simulated participant connects from 127.0.0.1
 pages:
   - {{type: consent, id: consent, text: Consent text.}}
   - type: pairwise
@@ -171,7 +172,7 @@ class Client:
 
     def run(self):
         code, _, loc = self.request("enter", f"/start/load-test?PROLIFIC_PID={self.pid}"
-                                    f"&STUDY_ID=bench&SESSION_ID=s{self.pid}")
+                                    f"&STUDY_ID={'5e' * 12}&SESSION_ID=s{self.pid}")
         assert code == 302, code
         self.sid = loc.split("/s/")[1].strip("/")
         while True:
@@ -267,7 +268,7 @@ def run_load(name, study, db_url, args, kill_after=None):
     server = Gunicorn(study, db_url, args.workers, args.threads).start()
     stats = collections.defaultdict(list)
     deadline = time.time() + args.deadline
-    clients = [Client(server.url, f"{name[:2]}{i:05d}", np.random.default_rng(i), deadline, stats,
+    clients = [Client(server.url, f"{name[:2].encode().hex()}{i:020x}", np.random.default_rng(i), deadline, stats,
                       args.think) for i in range(args.participants)]
     crash = {}
 

@@ -11,7 +11,7 @@ from collections import Counter
 from flask import Blueprint, Response, current_app, jsonify, redirect, render_template, request, session, url_for
 
 from study_app.context import get_store, get_study
-from study_app.export import raw_json, result_rows, results_csv
+from study_app.export import raw_json_chunks, result_rows, results_csv
 from study_app.monitor import participant_rows, status_counts, unplayable_reports
 from study_app.pages import get_kind
 from study_app.security import admin_logins, admin_required, check_token
@@ -104,6 +104,7 @@ def export_csv():
 @admin_required
 def export_json():
     study, store = get_study(), get_store()
-    return Response(raw_json(study, store.dump(study.id)), mimetype="application/json",
+    # streamed: the interaction log is read from the database in batches while the response is sent
+    return Response(raw_json_chunks(study, store.dump(study.id)), mimetype="application/json",
                     headers={"Content-Disposition": f'attachment; filename="{study.id}-raw.json"'})
 

@@ -7,10 +7,11 @@ import pathlib
 from flask import Flask, jsonify, render_template, request
 from flask_wtf.csrf import CSRFError, CSRFProtect
 from jinja2 import ChoiceLoader, FileSystemLoader
+from werkzeug.middleware.proxy_fix import ProxyFix
 
 from study_app.context import install
 from study_app.definition import Study, load_study
-from study_app.design import default_plans_path, read_plans
+from study_app.design import default_plans_path, entry_pages, read_plans
 from study_app.errors import StudyStateError
 from study_app.pages import get_kind, page_kinds
 from study_app.policy import Rules
@@ -29,7 +30,8 @@ def create_app(config: dict) -> Flask:
     ``DATABASE_URL`` (default SQLite ``study.db`` in the instance folder), ``SECRET_KEY``
     and ``ADMIN_TOKEN`` (both required, at least 12 characters; no defaults exist),
     ``SESSION_COOKIE_SECURE`` (default True), ``INIT_DB`` (create tables and store plans,
-    default True). Anything else is passed to ``app.config``.
+    default True), ``TRUSTED_PROXIES`` (reverse proxies in front of the server whose ``X-Forwarded-For``
+    gives the client address, default 0). Anything else is passed to ``app.config``.
     """
     config = dict(config)
     for key in ("SECRET_KEY", "ADMIN_TOKEN"):
@@ -61,6 +63,10 @@ def create_app(config: dict) -> Flask:
         app.config.update(SESSION_COOKIE_SAMESITE="None", SESSION_COOKIE_SECURE=True,
                           SESSION_COOKIE_PARTITIONED=True)
     init = config.pop("INIT_DB", True)
+    proxies = config.pop("TRUSTED_PROXIES", 0)
+    if isinstance(proxies, bool) or not isinstance(proxies, int) or not 0 <= proxies <= 5:
+        raise StudyStateError("expected the number of trusted reverse proxies in front of the server, 0-5",
+                              field="TRUSTED_PROXIES")
     url = config.pop("DATABASE_URL", None)
     app.config.update(config)
     if url is None:
@@ -69,7 +75,11 @@ def create_app(config: dict) -> Flask:
     engine = make_engine(url)
     if init:
         init_db(engine, study, plans)
-    install(app, study, Store(engine, Rules.of(study)))
+    install(app, study, Store(engine, Rules.of(study), entry_pages=entry_pages(plans)))
+    if proxies:
+        # Behind reverse proxies the client address is in X-Forwarded-For (the per-address limits use it).
+        app.config["TRUSTED_PROXIES_SET"] = True
+        app.wsgi_app = ProxyFix(app.wsgi_app, x_for=proxies)  # type: ignore[method-assign]
 
     # plug-in page kinds may keep their templates outside the package
     folders = [k.template_folder for k in page_kinds().values() if k.template_folder]
@@ -123,8 +133,8 @@ def create_app_from_env() -> Flask:
     """Factory for gunicorn: ``gunicorn 'study_app.app:create_app_from_env()'``.
 
     Reads ``EVALSUITE_STUDY``, ``EVALSUITE_DATABASE_URL``, ``EVALSUITE_SECRET_KEY``,
-    ``EVALSUITE_ADMIN_TOKEN`` and optionally ``EVALSUITE_PLANS``,
-    ``EVALSUITE_INSECURE_COOKIES=1`` (plain-HTTP testing only).
+    ``EVALSUITE_ADMIN_TOKEN`` and optionally ``EVALSUITE_PLANS``, ``EVALSUITE_TRUSTED_PROXIES`` (e.g. 1
+    behind nginx), ``EVALSUITE_INSECURE_COOKIES=1`` (plain-HTTP testing only).
     """
     env = os.environ
     missing = [k for k in ("EVALSUITE_STUDY", "EVALSUITE_SECRET_KEY", "EVALSUITE_ADMIN_TOKEN")
@@ -134,6 +144,10 @@ def create_app_from_env() -> Flask:
     config: dict[str, object] = {"STUDY": env["EVALSUITE_STUDY"], "SECRET_KEY": env["EVALSUITE_SECRET_KEY"],
               "ADMIN_TOKEN": env["EVALSUITE_ADMIN_TOKEN"], "PLANS": env.get("EVALSUITE_PLANS"),
               "DATABASE_URL": env.get("EVALSUITE_DATABASE_URL")}
+    proxies = env.get("EVALSUITE_TRUSTED_PROXIES", "0")
+    if not proxies.isdigit():
+        raise StudyStateError(f"expected a number of proxies, got {proxies!r}", field="EVALSUITE_TRUSTED_PROXIES")
+    config["TRUSTED_PROXIES"] = int(proxies)
     if env.get("EVALSUITE_INSECURE_COOKIES") == "1":
         config["SESSION_COOKIE_SECURE"] = False
     return create_app(config)

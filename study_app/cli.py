@@ -128,7 +128,7 @@ def serve(study_file, db, instance, host, port, admin_token, secret_key, secure_
 def export(study_file, db, instance, out, raw):
     """Export the answers of STUDY_FILE to results.csv (and raw JSON)."""
     from study_app.definition import load_study
-    from study_app.export import raw_json, result_rows, results_csv
+    from study_app.export import raw_json_chunks, result_rows, results_csv
     from study_app.storage import Store, make_engine
 
     st = load_study(study_file)
@@ -137,7 +137,8 @@ def export(study_file, db, instance, out, raw):
     pathlib.Path(out).write_text(results_csv(st, dump))
     click.echo(f"{len(result_rows(st, dump))} judgements from {len(dump['sessions'])} sessions -> {out}")
     if raw:
-        pathlib.Path(raw).write_text(raw_json(st, dump))
+        with open(raw, "w", encoding="utf-8") as fh:
+            fh.writelines(raw_json_chunks(st, dump))
         click.echo(f"raw JSON -> {raw}")
 
 

@@ -114,7 +114,7 @@ def _read_text(path: pathlib.Path, missing: str, encoding: str) -> tuple[bytes, 
 
 def load_manifest(path) -> Manifest:
     """Read a stimulus manifest CSV (columns ``file, condition, segment`` and optionally
-    ``kind, expected, motion_segment, block``); file names are relative to its folder."""
+    ``kind, expected, motion_segment, block, duration_s``); file names are relative to its folder."""
     path = pathlib.Path(path)
     raw, text = _read_text(path, "stimulus manifest not found; expected a CSV file", "utf-8-sig")
     reader = csv.DictReader(text.splitlines())
@@ -149,7 +149,8 @@ def load_manifest(path) -> Manifest:
         seen_files[file] = lineno
         stim = Stimulus(file=file, condition=row["condition"], segment=row["segment"], kind=kind,
                         expected=row.get("expected", ""), motion_segment=row.get("motion_segment", ""),
-                        block=row.get("block", ""), line=lineno)
+                        block=row.get("block", ""), duration_s=_duration(row.get("duration_s", ""), path, lineno),
+                        line=lineno)
         if kind == "attention" and not stim.expected:
             raise StudyDefinitionError("attention-check rows need the answer an attentive "
                                        "participant gives", path=path, line=lineno, field="expected")
@@ -172,6 +173,19 @@ def load_manifest(path) -> Manifest:
                 f"file name {s.file!r} contains the condition name {leaked!r}; expected blinded "
                 "file names (participants see them)", path=path, line=s.line, field="file")
     return Manifest(path=path, root=root, stimuli=stimuli, sha256=hashlib.sha256(raw).hexdigest())
+
+
+def _duration(text: str, path, lineno) -> float | None:
+    if not text:
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 < value < 1e6:
+        raise StudyDefinitionError(f"expected a clip length in seconds (a positive number), got {text!r}",
+                                   path=path, line=lineno, field="duration_s")
+    return value
 
 
 def _check_file_name(file: str, root: pathlib.Path, path, lineno):
@@ -244,14 +258,23 @@ def load_study(path) -> Study:
         release_failed=chk.get(data, "release_failed", "", bool, default=True),
         prolific_study_id=chk.get(data, "prolific_study_id", "", str, default=""),
         redirect_seconds=chk.int_range(data, "redirect_seconds", "", 0, 3600, default=0),
+        new_sessions_per_address=chk.int_range(data, "new_sessions_per_address", "", 0, 1_000_000, default=10),
+        new_sessions_window_minutes=float(chk.int_range(data, "new_sessions_window_minutes", "", 1, 525_600,
+                                                        default=60)),
+        playback_min_fraction=float(chk.get(data, "playback_min_fraction", "", (int, float), default=0.5)),
         sha256=hashlib.sha256(raw).hexdigest(),
     )
+    if not 0 <= study.playback_min_fraction <= 1:
+        chk.fail("playback_min_fraction", f"expected a number from 0 to 1, got {study.playback_min_fraction}")
     if study.reservation_minutes <= 0:
         chk.fail("reservation_minutes", f"expected a positive number, got {study.reservation_minutes}")
     for key in ("completion_code", "failure_code"):
         code = getattr(study, key)
         if code and not re.match(r"^[A-Za-z0-9_-]{1,64}$", code):
             chk.fail(key, f"expected letters, digits, '_' or '-' (at most 64), got {code!r}")
+    if study.prolific_study_id and not re.match(r"^[0-9a-fA-F]{24}$", study.prolific_study_id):
+        chk.fail("prolific_study_id", f"expected a Prolific study id (24 hexadecimal characters), got "
+                 f"{study.prolific_study_id!r}")
     if platform in ("prolific", "mturk") and not study.completion_code:
         chk.fail("completion_code", f"missing; expected the completion code for {platform}")
     pages = chk.get(data, "pages", "", list, required=True, expected="a list of pages")
@@ -266,7 +289,8 @@ def load_study(path) -> Study:
 TOP_LEVEL_KEYS = ("id", "title", "stimuli", "platform", "sessions", "seed", "completion_code",
                   "failure_code", "max_failed_attention_checks", "reservation_minutes",
                   "require_full_playback", "min_width", "block_mobile", "resume", "release_failed",
-                  "prolific_study_id", "redirect_seconds", "pages")
+                  "prolific_study_id", "redirect_seconds", "new_sessions_per_address",
+                  "new_sessions_window_minutes", "playback_min_fraction", "pages")
 def _load_page(chk: Checker, page, where: str, study: Study) -> Page:
     kinds = page_kinds()
     if not isinstance(page, dict):

@@ -105,6 +105,6 @@ def run(out_dir: pathlib.Path, echo) -> None:
     echo(f"  every comparison shown {'/'.join(map(str, per_pair))} times with A left (and as often right)")
     echo("  serve it locally:")
     echo(f"    evalsuite study serve {study_path} --admin-token $(evalsuite study admin-token)")
-    echo(f"    participant link: http://127.0.0.1:5000/start/{study.id}?PROLIFIC_PID=test1"
-         "&STUDY_ID=demo&SESSION_ID=s1   admin: http://127.0.0.1:5000/admin/")
+    echo(f"    participant link: http://127.0.0.1:5000/start/{study.id}?PROLIFIC_PID=5f00000000000000000000a1"
+         "&STUDY_ID=5e00000000000000000000d0&SESSION_ID=s1   admin: http://127.0.0.1:5000/admin/")
     echo(f"    results: evalsuite study export {study_path} -o results.csv")

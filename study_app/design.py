@@ -13,9 +13,12 @@
 * the order of a session's block pages is a row of a Williams balanced Latin square (each
   page in each position equally often, first-order carry-over balanced);
 * MUSHRA pages rotate the slot order (each condition in each slot equally often);
-* attention-check pages are inserted at the block positions the definition names (never
-  position 0), training pages where the definition places them, flagged and excluded from
-  analysis;
+* attention-check pages are inserted near the block positions the definition names: each
+  session moves each check by up to ``attention_window`` pages (default 2; seeded per session
+  from the study's seed), never to position 0; training pages where the definition places them, flagged and excluded from
+  analysis; a training page never shows material the participant rates for real (the same
+  stimuli, e.g. the same pair on the same segment on either side): it takes the next balanced
+  page whose material the session's rated pages do not use;
 * a ``headphone_check`` page gets its own shuffled tone orders per session (the quiet tone in
   each position equally often, see :mod:`study_app.headphones`);
 * ``mismatched: true`` pairwise blocks pair each condition's matched video with its
@@ -28,6 +31,7 @@ from __future__ import annotations
 import hashlib
 import json
 import pathlib
+import random
 from collections import Counter
 
 from study_app.errors import StudyDefinitionError
@@ -69,12 +73,17 @@ class _Lookup:
 
 
 class _PlanBuilder:
-    """What page kinds need to expand a definition page: the study, the stimulus lookup, the kinds."""
+    """What page kinds need to expand a definition page: the study, the stimulus lookup, the kinds, and
+    (for practice pages) the material the session rates for real."""
 
     def __init__(self, study: Study):
         self.study = study
         self.lookup = _Lookup(study)
         self.kind = get_block_kind
+        self.rated: set[frozenset[str]] = set()     # material of the current session's rated pages
+
+    def material(self, spec: dict) -> frozenset[str]:
+        return get_block_kind(spec["type"]).material(self.study, spec)
 
 
 def build_plans(study: Study) -> dict:
@@ -86,25 +95,71 @@ def build_plans(study: Study) -> dict:
     check_counter: Counter = Counter()
     plans = []
     for s in range(study.sessions):
-        pages = []
+        # Rated pages first: practice pages (placed before them) must use other material.
+        rated: dict[str, list[dict]] = {}
         for page in study.pages:
             if not get_kind(page.type).block:
-                pages.extend(get_kind(page.type).plan_pages(page, s, builder))
                 continue
             kind = kinds[page.id]
             k = page.cfg["pages"]
             regular = [kind.regular_page(page, s * k + j, builder.lookup, page.cfg["segments"]) for j in range(k)]
             rows = williams_rows(k)
             ordered = [regular[i] for i in rows[s % len(rows)]]
-            for pos in page.cfg["attention_checks"]:
-                ordered.insert(pos, kind.check_page(page, check_counter[page.id], pools[page.id], builder.lookup))
-                check_counter[page.id] += 1
-            for j, p in enumerate(ordered):
-                pages.append({"page": f"{page.id}-{j + 1:02d}", "block": page.id, "training": False,
-                              "check": bool(p.pop("check", False) or "check_slot" in p), **p})
+            rng = session_rng(study.seed, page.id, s)
+            checks = [kind.session_check_page(page, check_counter[page.id] + i, pools[page.id], builder.lookup,
+                                              ordered, rng) for i in range(len(page.cfg["attention_checks"]))]
+            check_counter[page.id] += len(checks)
+            for pos, check in zip(check_positions(page.cfg["attention_checks"], k, page.cfg["attention_window"],
+                                                  rng), checks):
+                ordered.insert(pos, check)
+            rated[page.id] = [{"page": f"{page.id}-{j + 1:02d}", "block": page.id, "training": False,
+                               "check": bool(p.pop("check", False) or "check_slot" in p), **p}
+                              for j, p in enumerate(ordered)]
+        builder.rated = {builder.material(p) for block_pages in rated.values() for p in block_pages}
+        pages = []
+        for page in study.pages:
+            if get_kind(page.type).block:
+                pages.extend(rated[page.id])
+            else:
+                pages.extend(get_kind(page.type).plan_pages(page, s, builder))
         plans.append({"key": f"plan-{s:04d}", "pages": pages})
     return {"format": PLANS_FORMAT, "study": study.id, "definition_sha256": study.sha256,
             "manifest_sha256": study.manifest.sha256, "plans": plans}
+
+
+def session_rng(seed: int, block_id: str, session: int) -> random.Random:
+    """A generator for one session and block, seeded from the study's seed (the same plans on every build)."""
+    digest = hashlib.sha256(f"evalsuite-plan|{seed}|{block_id}|{session}".encode()).digest()
+    return random.Random(int.from_bytes(digest[:8], "big"))
+
+
+def check_positions(configured: list[int], n_pages: int, window: int, rng: random.Random) -> list[int]:
+    """Where a session's attention checks go in a block of ``n_pages`` trial pages: each configured position
+    moved by up to ``window`` pages (uniformly), never to position 0, in order, none past the block's end.
+    Returned as insertion indices, in order (the ``i``-th check ends up at its index)."""
+    out: list[int] = []
+    for i, p in enumerate(configured):
+        lo = max(1, p - window, out[-1] + 1 if out else 1)
+        hi = min(n_pages + i, p + window)
+        out.append(rng.randint(lo, max(lo, hi)))
+    return out
+
+
+def entry_pages(plans: dict) -> list[dict] | None:
+    """The pages a session shows before it holds a plan, or None.
+
+    When the first page is the same in every plan (a consent page, instructions, a questionnaire), a session
+    starts without a plan and reserves one when that page is answered (``study_app.storage``): visitors who
+    never start do not hold a plan. The list returned is the first plan's pages, of which only the first is
+    ever shown before the reservation.
+    """
+    items = plans["plans"]
+    if not items or not items[0]["pages"]:
+        return None
+    first = items[0]["pages"][0]
+    if any(not p["pages"] or p["pages"][0] != first for p in items):
+        return None
+    return items[0]["pages"]
 
 
 def plans_digest(plans: dict) -> str:

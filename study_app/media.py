@@ -37,6 +37,8 @@ def video(sid, index, slot):
     kind = get_kind(page["type"])
     if not 0 <= slot < kind.n_slots(page):
         abort(404)
+    # The server's own record of what was fetched (study_app.playback), whatever the browser reports.
+    store.record_media_request(sid, index, slot)
     media = kind.media(study, page, slot)
     if media.body is not None:
         # generated media (e.g. headphone-check tones), with byte ranges as for the videos

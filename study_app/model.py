@@ -24,6 +24,7 @@ class Stimulus:
     expected: str = ""              # attention checks: the answer an attentive participant gives
     motion_segment: str = ""        # mismatched stimuli: the segment the motion comes from
     block: str = ""                 # attention checks: restrict to this block id
+    duration_s: float | None = None  # the clip's length (optional column; else read from the file)
     line: int = 0
 
     @property
@@ -72,6 +73,11 @@ class Study:
     release_failed: bool = True
     prolific_study_id: str = ""
     redirect_seconds: int = 0
+    # At most this many new sessions per client address within the window (0: no limit).
+    new_sessions_per_address: int = 10
+    new_sessions_window_minutes: float = 60.0
+    # A page is flagged when its time is below this fraction of its longest clip (study_app.playback).
+    playback_min_fraction: float = 0.5
     sha256: str = ""
 
     @property
@@ -80,6 +86,12 @@ class Study:
         from study_app.pages import get_kind
 
         return {p.id: p for p in self.pages if get_kind(p.type).block}
+
+    def kind_of(self, page: Page):
+        """The registered page kind of a definition page (:mod:`study_app.pages`)."""
+        from study_app.pages import get_kind
+
+        return get_kind(page.type)
 
     def page(self, page_id: str) -> Page:
         for p in self.pages:

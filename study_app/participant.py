@@ -6,6 +6,8 @@ and JSON carry slot numbers and labels only: conditions and file names stay on t
 """
 from __future__ import annotations
 
+import hashlib
+import hmac
 import re
 import secrets
 import urllib.parse
@@ -22,6 +24,17 @@ from study_app.submission import validate_submission
 bp = Blueprint("participant", __name__)
 
 PARAM_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+# Platform ids (docs/study_app.md, section 5): Prolific participant and study ids are 24 hexadecimal
+# characters (MongoDB object ids); MTurk worker ids are "A" and upper-case letters or digits, assignment and
+# HIT ids upper-case letters or digits (the MTurk API's patterns, at most 64 characters).
+PLATFORM_ID_RE = {
+    ("prolific", "PROLIFIC_PID"): re.compile(r"^[0-9a-fA-F]{24}$"),
+    ("prolific", "STUDY_ID"): re.compile(r"^[0-9a-fA-F]{24}$"),
+    ("prolific", "SESSION_ID"): PARAM_RE,
+    ("mturk", "workerId"): re.compile(r"^A[A-Z0-9]{1,63}$"),
+    ("mturk", "assignmentId"): re.compile(r"^[A-Z0-9]{1,64}$"),
+    ("mturk", "hitId"): re.compile(r"^[A-Z0-9]{1,64}$"),
+}
 MOBILE_RE = re.compile(r"Mobi|Android|iPhone|iPad|iPod|Tablet|Silk|Kindle", re.I)
 MTURK_PREVIEW = "ASSIGNMENT_ID_NOT_AVAILABLE"
 MTURK_SUBMIT_HOSTS = ("www.mturk.com", "workersandbox.mturk.com")
@@ -80,11 +93,12 @@ def start(study_id):
     if study.platform == "prolific":
         names = ("PROLIFIC_PID", "STUDY_ID", "SESSION_ID")
         values = {n: args.get(n, "") for n in names}
-        bad = [n for n in names if not PARAM_RE.match(values[n])]
+        bad = [n for n in names if not PLATFORM_ID_RE[study.platform, n].match(values[n])]
         if bad:
             return _message("Link incomplete", "Please open this study from Prolific (the link lacks "
                             f"a valid {bad[0]}).", 400)
-        if study.prolific_study_id and values["STUDY_ID"] != study.prolific_study_id:
+        values["PROLIFIC_PID"], values["STUDY_ID"] = values["PROLIFIC_PID"].lower(), values["STUDY_ID"].lower()
+        if study.prolific_study_id and values["STUDY_ID"] != study.prolific_study_id.lower():
             return _message("Wrong study", "This link belongs to another Prolific study.", 400)
         participant, platform_data = values["PROLIFIC_PID"], values
     elif study.platform == "mturk":
@@ -93,7 +107,7 @@ def start(study_id):
             return render_template("preview.html", study=study)
         names = ("workerId", "assignmentId", "hitId")
         values = {n: args.get(n, "") for n in names}
-        bad = [n for n in names if not PARAM_RE.match(values[n])]
+        bad = [n for n in names if not PLATFORM_ID_RE[study.platform, n].match(values[n])]
         submit_to = args.get("turkSubmitTo", "")
         parsed = urllib.parse.urlparse(submit_to)
         if bad or parsed.scheme != "https" or parsed.hostname not in MTURK_SUBMIT_HOSTS:
@@ -107,11 +121,19 @@ def start(study_id):
             participant = "anon-" + secrets.token_hex(8)
             session[f"anon_{study.id}"] = participant
             session.permanent = True
-    sess, created = _store().start_session(study, participant, study.platform, platform_data, ua)
+    address = client_key()
+    sess, state = _store().start_session(study, participant, study.platform, platform_data, ua, address)
+    if state == "throttled":
+        current_app.logger.warning("study %s: refused a new session for participant %s: address limit "
+                                   "(%d new sessions in %g minutes) reached", study.id, participant,
+                                   study.new_sessions_per_address, study.new_sessions_window_minutes)
+        wait = _store().retry_after(study, address)
+        page, code = _message("Too many new sessions", "Too many participants have started this study from "
+                              "your network in a short time. Please try again later.", 429)
+        return page, code, {"Retry-After": str(wait)}
     if sess is None:
-        return _message("Study full", "All places in this study are taken at the moment. Please "
-                        "return the task and try again later.", 503)
-    if not created:
+        return _full()
+    if state == "existing":
         if sess.status == "finished":
             return _message("Already completed", "You have already completed this study. You can "
                             "take part only once.", 409)
@@ -120,7 +142,7 @@ def start(study_id):
         if sess.status == "expired":
             return _message("Time expired", "Your place in this study has expired and the study "
                             "cannot be started again.", 409)
-        if not study.resume:
+        if not study.resume and sess.plan_id is not None:      # (without a plan it has not started yet)
             return _message("Already started", "You have already started this study; it cannot be "
                             "started again.", 409)
         if not _may_resume(sess, platform_data):
@@ -145,6 +167,8 @@ def page(sid):
     sess, pages, view, played = loaded
     if sess.status != "active":
         return _ended(sess)
+    if sess.plan_id is None and not store.has_free_plan(study.id):
+        return _full()
     index = sess.current_page
     spec = pages[index]
     data = _page_data(study, spec, index, len(pages), sid)
@@ -173,6 +197,22 @@ def _page_data(study, spec, index, total, sid) -> dict:
     data["videos"] = [url_for("media.video", sid=sid, index=index, slot=k) for k in range(kind.n_slots(spec))]
     data.update(kind.page_data(study, spec, _page_cfg(study, spec)))
     return data
+
+
+def _full():
+    return _message("Study full", "All places in this study are taken at the moment. Please "
+                    "return the task and try again later.", 503)
+
+
+def client_key() -> str:
+    """A keyed hash of the client's address (the per-address limit stores no address)."""
+    if "X-Forwarded-For" in request.headers and not current_app.config.get("TRUSTED_PROXIES_SET"):
+        current_app.config["TRUSTED_PROXIES_SET"] = True      # warn once per process
+        current_app.logger.warning("requests carry X-Forwarded-For but no proxy is trusted: every client "
+                                   "shares the proxy's address for the per-address limit (set "
+                                   "EVALSUITE_TRUSTED_PROXIES, docs/study_app.md section 9)")
+    key = current_app.config["SECRET_KEY"].encode()
+    return hmac.new(key, f"address|{request.remote_addr or 'unknown'}".encode(), hashlib.sha256).hexdigest()[:32]
 
 
 def _ended(sess):
@@ -218,12 +258,27 @@ def answer(sid, index):
     if status == "missing":
         return jsonify(error="this session does not exist (any more); open the study link again"), 404
     nxt = url_for("participant.page", sid=sid)
+    if status == "full":
+        return jsonify(error="All places in this study are taken at the moment. Please return the task and "
+                       "try again later.", next=nxt), 409
     if status == "ahead":
         return jsonify(error="this page is not open yet; answer the current page first", next=nxt), 409
     if status == "conflict":
         return jsonify(error="this page was already answered; the stored answer is kept",
                        next=nxt), 409
-    return jsonify(status=status, next=nxt, session_status=sess.status)
+    extra = {}
+    if ans is not None and ans.events_dropped:
+        extra["events_dropped"] = ans.events_dropped
+        extra["warning"] = _cap_message(_store().rules)
+    return jsonify(status=status, next=nxt, session_status=sess.status, **extra)
+
+
+def _cap_message(rules, which: str = "") -> str:
+    what = {"page": f"of this page is full (at most {rules.events_per_page} events per page",
+            "session": f"of this session is full (at most {rules.events_per_session} events per session"}.get(
+        which, f"is full (at most {rules.events_per_page} events per page and {rules.events_per_session} per "
+        "session")
+    return f"the interaction log {what}, play/ended and the others each); further events are not recorded"
 
 
 @bp.route("/s/<sid>/draft/<int:index>", methods=["POST"])
@@ -271,5 +326,7 @@ def events(sid, index):
         evs = parse_events(body.get("events"), n_slots(pages[index]))
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
-    store.log_events(sid, index, evs)
+    dropped, which = store.log_events(sid, index, evs)
+    if dropped:
+        return jsonify(error=_cap_message(store.rules, which), logged=len(evs) - dropped, dropped=dropped), 413
     return jsonify(logged=len(evs))

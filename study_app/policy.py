@@ -28,6 +28,9 @@ class Rules:
     max_failed_attention_checks: int = 2
     release_failed: bool = True
     reservation_minutes: float = 100.0
+    # Interaction-log caps: events beyond them are not stored (docs/study_app.md, section 6).
+    events_per_page: int = 1000
+    events_per_session: int = 10000
 
     @classmethod
     def of(cls, study) -> Rules:

@@ -28,6 +28,7 @@ from sqlalchemy import (
     UniqueConstraint,
     create_engine,
     event,
+    func,
     select,
 )
 from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
@@ -35,7 +36,10 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
 from study_app.design import plans_digest
 from study_app.errors import StudyStateError
+from study_app.media_log import MediaLog
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
+
+PLAYBACK_KINDS = ("play", "ended")     # the events the server's playback check reads
 
 
 def utcnow() -> dt.datetime:
@@ -102,6 +106,7 @@ class Answer(Base):
     answered_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
     rt_ms: Mapped[int] = mapped_column(Integer)
     client_rt_ms: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    events_dropped = 0      # not stored: new events of this answer the caps left out (told to the client)
 
 
 class PageView(Base):
@@ -130,6 +135,29 @@ class Event(Base):
     client_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     detail: Mapped[str] = mapped_column(String(200), default="")
     server_time: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class MediaRequest(Base):
+    """A media slot of a page that the session fetched from the server (first time): the server's own
+    evidence of playback (:mod:`study_app.playback`)."""
+    __tablename__ = "media_requests"
+    __table_args__ = (UniqueConstraint("session_id", "page_index", "slot"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
+    page_index: Mapped[int] = mapped_column(Integer)
+    slot: Mapped[int] = mapped_column(Integer)
+    first_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class Entry(Base):
+    """A session created from a client address (a keyed hash of it, never the address itself): the limit
+    on new sessions per address counts these."""
+    __tablename__ = "session_entries"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    study: Mapped[str] = mapped_column(String(64), index=True)
+    address: Mapped[str] = mapped_column(String(64), index=True)
+    session_id: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow, index=True)
 
 
 # ------------------------------------------------------------------------------- engine
@@ -198,7 +226,7 @@ def init_db(engine, study, plans: dict):
 
 
 def _plan(db, sess: ParticipantSession) -> Plan:
-    """The plan a session holds (every session is created with one)."""
+    """The plan a session holds."""
     plan = db.get(Plan, sess.plan_id)
     if plan is None:
         raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
@@ -208,11 +236,15 @@ def _plan(db, sess: ParticipantSession) -> Plan:
 class Store:
     """All database operations of the app; each method is one transaction."""
 
-    def __init__(self, engine, rules: Rules | None = None):
-        """``rules``: the study's session policy settings (:class:`study_app.policy.Rules`)."""
+    def __init__(self, engine, rules: Rules | None = None, entry_pages: list[dict] | None = None):
+        """``rules``: the study's session policy settings (:class:`study_app.policy.Rules`);
+        ``entry_pages``: what a session without a plan shows (:func:`study_app.design.entry_pages`; None:
+        every session reserves its plan when it is created)."""
         self.engine = engine
         self.rules = rules or Rules()
+        self.entry_pages = entry_pages
         self.Session = sessionmaker(engine, expire_on_commit=False)
+        self.media_log = MediaLog(engine, self.Session, MediaRequest)
         # For reads only: never writes, so on SQLite it does not take the write lock.
         self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
                                         expire_on_commit=False)
@@ -235,15 +267,17 @@ class Store:
             plan.times_released += 1
 
     def start_session(self, study, participant: str, platform: str, platform_data: dict,
-                      user_agent: str):
-        """Create a session and reserve a plan for it.
+                      user_agent: str, address: str = ""):
+        """Create a session for a participant id (or find theirs).
 
-        Returns ``(session, created)``; when the participant already has a session for this
-        study it is returned unchanged (``created`` False) so the caller resumes or refuses.
-        Returns ``(None, False)`` when no plan is free.
+        Returns ``(session, state)``: ``"existing"`` (the participant already has a session for this study,
+        returned unchanged so that the caller resumes or refuses), ``"created"``, ``"full"`` (no plan is
+        free; nothing created) or ``"throttled"`` (``address``, a keyed hash of the client address, created
+        ``study.new_sessions_per_address`` sessions within the window; nothing created). A new session holds
+        no plan when the store has ``entry_pages``: it reserves one when its first page is answered
+        (:meth:`submit`); otherwise the plan is reserved now.
         """
         now = utcnow()
-        until = now + dt.timedelta(minutes=study.reservation_minutes)
         for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
@@ -252,30 +286,73 @@ class Store:
                         ParticipantSession.participant == participant)).first()
                     if existing is not None:
                         self._check_expiry(db, existing, now)
-                        return existing, False
+                        return existing, "existing"
+                    limit = study.new_sessions_per_address
+                    if limit and address and self.recent_entries(db, study, address, now)[0] >= limit:
+                        return None, "throttled"
                     self.release_expired(db, study.id, now)
-                    stmt = (select(Plan).where(Plan.study == study.id, Plan.status == "free")
-                            .order_by(Plan.position).limit(1))
-                    if self.is_postgres:
-                        stmt = stmt.with_for_update(skip_locked=True)
-                    plan = db.scalars(stmt).first()
+                    plan = self._free_plan(db, study.id)
                     if plan is None:
-                        return None, False
+                        return None, "full"
                     sess = ParticipantSession(
                         id=secrets.token_urlsafe(18), study=study.id, participant=participant,
-                        platform=platform, platform_data=platform_data, plan_id=plan.id,
+                        platform=platform, platform_data=platform_data, plan_id=None,
                         user_agent=user_agent[:1000], created_at=now, updated_at=now)
                     db.add(sess)
                     db.flush()
-                    plan.status, plan.session_id, plan.reserved_until = "reserved", sess.id, until
-                return sess, True
+                    if address:
+                        db.add(Entry(study=study.id, address=address, session_id=sess.id, created_at=now))
+                    if self.entry_pages is None:
+                        self._reserve(db, sess, plan, now)
+                return sess, "created"
             except IntegrityError:
                 # Same participant entering twice at the same moment: the other request won.
                 continue
         raise RuntimeError("could not start a session")
 
+    def recent_entries(self, db, study, address: str, now: dt.datetime) -> tuple[int, int]:
+        """(sessions created from ``address`` within the study's window, seconds until the oldest of them
+        leaves the window)."""
+        since = now - dt.timedelta(minutes=study.new_sessions_window_minutes)
+        n, oldest = db.execute(select(func.count(Entry.id), func.min(Entry.created_at)).where(
+            Entry.study == study.id, Entry.address == address, Entry.created_at >= since)).one()
+        wait = 0 if oldest is None else max(1, int((oldest - since).total_seconds()) + 1)
+        return int(n), wait
+
+    def retry_after(self, study, address: str) -> int:
+        """Seconds until ``address`` may create a session again."""
+        with self.ReadSession() as db:
+            return self.recent_entries(db, study, address, utcnow())[1]
+
+    def _free_plan(self, db, study_id: str) -> Plan | None:
+        stmt = (select(Plan).where(Plan.study == study_id, Plan.status == "free")
+                .order_by(Plan.position).limit(1))
+        if self.is_postgres:
+            stmt = stmt.with_for_update(skip_locked=True)
+        return db.scalars(stmt).first()
+
+    def _reserve(self, db, sess: ParticipantSession, plan: Plan, now: dt.datetime) -> None:
+        sess.plan_id = plan.id
+        plan.status, plan.session_id = "reserved", sess.id
+        plan.reserved_until = now + dt.timedelta(minutes=self.rules.reservation_minutes)
+
+    def has_free_plan(self, study_id: str) -> bool:
+        """Whether a new participant could get a plan now (a free one, or one whose reservation ran out)."""
+        now = utcnow()
+        with self.ReadSession() as db:
+            return db.scalar(select(Plan.id).where(Plan.study == study_id, (Plan.status == "free") | (
+                (Plan.status == "reserved") & (Plan.reserved_until < now))).limit(1)) is not None
+
+    def _pages(self, db, sess: ParticipantSession) -> list[dict]:
+        """The pages a session shows: its plan's, or the entry pages while it holds no plan."""
+        if sess.plan_id is None:
+            if self.entry_pages is None:
+                raise StudyStateError(f"session {sess.id} holds no plan and this study has no entry pages")
+            return self.entry_pages
+        return _plan(db, sess).pages
+
     def _check_expiry(self, db, sess, now):
-        if sess.status != "active":
+        if sess.status != "active" or sess.plan_id is None:
             return
         plan = db.get(Plan, sess.plan_id)
         if plan is not None and plan.status == "reserved" and plan.reserved_until < now:
@@ -289,7 +366,7 @@ class Store:
             if sess is None:
                 return None, None
             self._check_expiry(db, sess, now)
-            return sess, _plan(db, sess).pages
+            return sess, self._pages(db, sess)
 
     def read_session(self, session_id: str):
         """(session, plan pages) without touching reservations (read-only, no lock)."""
@@ -297,7 +374,7 @@ class Store:
             sess = db.get(ParticipantSession, session_id)
             if sess is None:
                 return None, None
-            return sess, _plan(db, sess).pages
+            return sess, self._pages(db, sess)
 
     def view_current_page(self, session_id: str):
         """One transaction for a page view: the session, its plan, the current page's first-view
@@ -309,7 +386,7 @@ class Store:
             if sess is None:
                 return None
             self._check_expiry(db, sess, now)
-            pages = _plan(db, sess).pages
+            pages = self._pages(db, sess)
             view = None
             played: dict[str, set] = {"play": set(), "ended": set()}
             if sess.status == "active":
@@ -338,28 +415,63 @@ class Store:
             view.draft, view.draft_at = draft, utcnow()
             return True
 
-    def add_events(self, db, session_id: str, page_index: int, events: list[dict]):
+    def add_events(self, db, session_id: str, page_index: int, events: list[dict]) -> tuple[int, str]:
+        """Store the events not seen before, up to the caps (:class:`~study_app.policy.Rules`
+        ``events_per_page`` and ``events_per_session``, each for playback events and for the others);
+        returns how many new events the caps dropped and which cap (``"page"``/``"session"``, else "")."""
         if not events:
-            return
+            return 0, ""
         ids = [e["id"] for e in events]
         known = set(db.scalars(select(Event.client_id).where(Event.session_id == session_id,
                                                              Event.client_id.in_(ids))))
+        new = []
         for e in events:
             if e["id"] in known:
                 continue  # a retried batch: the log keeps one copy of each event
             known.add(e["id"])
+            new.append(e)
+        if not new:
+            return 0, ""
+        # Playback events (play, ended: what the server's playback check reads) and the rest are capped
+        # apart, so that a long slider drag can never crowd out the record that a video was played.
+        playback = Event.kind.in_(PLAYBACK_KINDS)
+        room, limit = {}, {}
+        for group, where in ((True, playback), (False, ~playback)):
+            counted = select(func.count(Event.id)).where(Event.session_id == session_id, where)
+            page_room = self.rules.events_per_page - db.scalar(counted.where(Event.page_index == page_index))
+            session_room = self.rules.events_per_session - db.scalar(counted)
+            room[group] = max(0, min(page_room, session_room))
+            limit[group] = "session" if session_room < page_room else "page"
+        dropped, which = 0, ""
+        for e in new:
+            group = e["kind"] in PLAYBACK_KINDS
+            if not room[group]:
+                dropped += 1
+                which = limit[group]
+                continue
+            room[group] -= 1
             db.add(Event(session_id=session_id, client_id=e["id"], page_index=page_index,
                          kind=e["kind"], slot=e.get("slot"), media_time=e.get("t"),
                          client_ms=e.get("ms"), detail=e.get("detail", "")))
+        return dropped, which
 
-    def log_events(self, session_id: str, page_index: int, events: list[dict]):
+    def log_events(self, session_id: str, page_index: int, events: list[dict]) -> tuple[int, str]:
+        """Store a batch of events (see :meth:`add_events`); returns how many the caps dropped, and which."""
         for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
-                    self.add_events(db, session_id, page_index, events)
-                return
+                    # The session row is the lock that keeps concurrent batches within the caps.
+                    db.scalars(self._locked(select(ParticipantSession.id).where(
+                        ParticipantSession.id == session_id))).first()
+                    return self.add_events(db, session_id, page_index, events)
             except IntegrityError:
                 continue
+        raise RuntimeError("could not store the events")
+
+    def record_media_request(self, session_id: str, page_index: int, slot: int) -> None:
+        """Note that the session fetched this media slot (:class:`study_app.media_log.MediaLog`: once, without
+        waiting for the disk or, on SQLite, for the write lock)."""
+        self.media_log.record(session_id, page_index, slot, utcnow())
 
     def slots_with(self, db, session_id: str, page_index: int, kind: str) -> set[int]:
         return set(db.scalars(select(Event.slot).where(
@@ -374,8 +486,8 @@ class Store:
         event of that kind on the page. The session then moves on as :func:`study_app.policy.after_answer`
         says. Returns ``(status, answer, session)`` with status ``"stored"``, ``"duplicate"`` (same token
         seen before: the first answer is returned), ``"ahead"`` (a page after the current one), ``"missing"``
-        (no such session) or ``"conflict"`` (this page already has a different
-        answer / is not the current page).
+        (no such session), ``"conflict"`` (this page already has a different answer / is not the current
+        page) or ``"full"`` (a session without a plan answered its first page and no plan is free).
         """
         for attempt in range(3):
             try:
@@ -397,9 +509,17 @@ class Store:
                         return "ahead", None, sess
                     if sess.status != "active" or sess.current_page != page_index:
                         return "conflict", None, sess
+                    if sess.plan_id is None:
+                        # The participant really starts (answers the first page, e.g. gives consent): only
+                        # now is a plan reserved. Rolled back with the answer if the answer is refused.
+                        self.release_expired(db, sess.study, now)
+                        free = self._free_plan(db, sess.study)
+                        if free is None:
+                            return "full", None, sess
+                        self._reserve(db, sess, free, now)
                     plan = _plan(db, sess)
                     sub = validate(plan.pages, lambda kind: self.slots_with(db, session_id, page_index, kind))
-                    self.add_events(db, session_id, page_index, sub.events)
+                    dropped, _ = self.add_events(db, session_id, page_index, sub.events)
                     view = db.scalars(select(PageView).where(PageView.session_id == session_id,
                                                              PageView.page_index == page_index)).first()
                     shown = view.shown_at if view else now
@@ -409,6 +529,7 @@ class Store:
                                     rt_ms=max(0, int((now - shown).total_seconds() * 1000)),
                                     client_rt_ms=sub.client_rt_ms)
                     db.add(answer)
+                    answer.events_dropped = dropped     # reported to the client, not stored
                     state = SessionState(sess.current_page, sess.passed_checks, sess.failed_checks)
                     move = after_answer(state, sub.outcome, plan.pages, self.rules)
                     sess.current_page, sess.updated_at = move.current_page, now
@@ -444,6 +565,11 @@ class Store:
     # --- admin / export -------------------------------------------------------------------
 
     def dump(self, study_id: str) -> dict:
+        """Sessions, plans and answers of a study. The interaction log is not loaded: ``events`` is an
+        :class:`EventLog` that streams it from the database when iterated (raw JSON export), and
+        ``event_counts`` the number of events per session, counted in SQL; ``media_requests`` maps
+        (session, page index) to the media slots the session fetched."""
+        self.media_log.flush()
         with self.ReadSession() as db:
             sessions = db.scalars(select(ParticipantSession).where(
                 ParticipantSession.study == study_id).order_by(ParticipantSession.created_at)).all()
@@ -451,7 +577,31 @@ class Store:
             of_study = ParticipantSession.study == study_id
             answers = db.scalars(select(Answer).join(ParticipantSession, Answer.session_id == ParticipantSession.id)
                                  .where(of_study).order_by(Answer.session_id, Answer.page_index)).all()
-            events = db.scalars(select(Event).join(ParticipantSession, Event.session_id == ParticipantSession.id)
-                                .where(of_study).order_by(Event.id)).all()
-            return {"sessions": sessions, "plans": plans, "answers": answers, "events": events}
+            counts = {sid: n for sid, n in db.execute(
+                select(Event.session_id, func.count(Event.id))
+                .join(ParticipantSession, Event.session_id == ParticipantSession.id)
+                .where(of_study).group_by(Event.session_id))}
+            requested: dict[tuple[str, int], set[int]] = {}
+            for sid, index, slot in db.execute(
+                    select(MediaRequest.session_id, MediaRequest.page_index, MediaRequest.slot)
+                    .join(ParticipantSession, MediaRequest.session_id == ParticipantSession.id).where(of_study)):
+                requested.setdefault((sid, index), set()).add(slot)
+            return {"sessions": sessions, "plans": plans, "answers": answers,
+                    "events": EventLog(self, study_id), "event_counts": counts, "media_requests": requested}
 
+
+class EventLog:
+    """A study's interaction log, read from the database in batches each time it is iterated (never all
+    rows at once)."""
+
+    def __init__(self, store: Store, study_id: str, batch: int = 2000):
+        self.store, self.study_id, self.batch = store, study_id, batch
+
+    def __iter__(self):
+        stmt = (select(Event).join(ParticipantSession, Event.session_id == ParticipantSession.id)
+                .where(ParticipantSession.study == self.study_id).order_by(Event.id)
+                .execution_options(yield_per=self.batch))
+        with self.store.ReadSession() as db:
+            for event in db.scalars(stmt):
+                yield event
+                db.expunge(event)

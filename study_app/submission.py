@@ -31,6 +31,11 @@ def validate_submission(study: Study, index: int, body: dict, pages: list[dict],
     if not 0 <= index < len(pages):
         raise PayloadError("no such page")
     spec = pages[index]
+    width = body.get("width")
+    if isinstance(width, int) and not isinstance(width, bool) and width < study.min_width:
+        # the page covers itself in narrower windows; an answer from one is refused on every page (and so a
+        # window too narrow for the study never reserves a plan, see Store.submit)
+        raise PayloadError(f"please use a browser window at least {study.min_width} pixels wide")
     fields = {k: v for k, v in body.items() if k not in ("answer", "events", "token", "client_rt_ms")}
     data = parse_answer(study, spec, body.get("answer"), fields)
     slots = n_slots(spec)

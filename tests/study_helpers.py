@@ -124,15 +124,31 @@ PAGE_DATA_RE = _re.compile(r'<script id="page-data" type="application/json">(.*?
 CSRF_RE = _re.compile(r'name="csrf_token" id="csrf_token" value="([^"]+)"')
 
 
+PROLIFIC_STUDY = "5e0000000000000000000001"
+_HEX24 = _re.compile(r"^[0-9a-f]{24}$")
+
+
+def valid_pid(name: str) -> str:
+    """A well-formed Prolific id (24 hex characters) for a test participant name (the name itself when it
+    is one already; short names stay readable: their bytes in hex, padded with zeros)."""
+    if _HEX24.match(name):
+        return name
+    if len(name) <= 12:
+        return name.encode().hex().ljust(24, "0")
+    import hashlib
+    return hashlib.sha256(name.encode()).hexdigest()[:24]
+
+
 def prolific_url(pid, study_id="gesture-test"):
-    return f"/start/{study_id}?PROLIFIC_PID={pid}&STUDY_ID=st{pid}&SESSION_ID=se{pid}"
+    pid = valid_pid(pid)
+    return f"/start/{study_id}?PROLIFIC_PID={pid}&STUDY_ID={PROLIFIC_STUDY}&SESSION_ID=se{pid}"
 
 
 class Participant:
     """A participant driving the Flask test client; records every answer it sent."""
 
     def __init__(self, client, pid, study_id="gesture-test"):
-        self.client, self.pid, self.sid, self.study_id = client, pid, None, study_id
+        self.client, self.pid, self.sid, self.study_id = client, valid_pid(pid), None, study_id
         self.responses = []          # every response body seen (for leak checks)
         self.urls = []
         self.sent = []               # (page index, answer) acknowledged by the server
@@ -155,6 +171,11 @@ class Participant:
         if r.status_code == 302:
             self.sid = r.headers["Location"].split("/s/")[1].strip("/")
         return r
+
+    def consent(self):
+        """Answer the first page (the consent page): the session starts and reserves its plan."""
+        _, data, csrf = self.page()
+        return self.submit(data, csrf, {"agree": True, "website": ""})
 
     def page(self):
         r = self.get(f"/s/{self.sid}/")
@@ -222,12 +243,12 @@ def run_participant(app, client, pid, rng, fail_checks=0, stop_after=None):
     p = Participant(client, pid)
     r = p.enter()
     assert r.status_code == 302, r.get_data(as_text=True)
-    pages = plan_pages(app, p.sid)
     failed = 0
     while True:
         r, data, csrf = p.page()
         if data is None:
             return p, r
+        pages = plan_pages(app, p.sid)      # the plan is reserved with the first answer
         spec = pages[data["index"]]
         ok = True
         if spec.get("check") and failed < fail_checks:

@@ -120,3 +120,35 @@ def test_bad_options():
         apply_exclusions(df, attention_fails=0)
     with pytest.raises(ValueError):
         apply_exclusions(df, duplicates="newest")
+
+
+def _flag(rows, pages):
+    """Mark ``playback_implausible`` on the rows of the given pages (0 on the others)."""
+    for r in rows:
+        r["playback_implausible"] = "1" if r["page"] in pages else "0"
+    return rows
+
+
+def test_implausible_playback_rule_counts_pages_and_can_be_off():
+    two_rows = session("P1", "S1", n=2) + [{**session("P1", "S1", n=1, training=0)[0], "question": "q2"}]
+    df = frame(_flag(two_rows, {"p0"}),                        # one page, two rows of it flagged
+               _flag(session("P2", "S2", n=3), {"p0", "p1", "t0"}),   # training pages count too
+               _flag(session("P3", "S3", n=3), set()))
+    r = apply_exclusions(df)
+    assert list(r.table["session"]) == ["S1", "S2"]
+    assert set(r.table["reason"]) == {"implausible_playback"}
+    assert r.table["detail"].iloc[0].startswith("1 of 3 pages")
+    assert r.table["detail"].iloc[1].startswith("3 of 4 pages")
+    assert r.summary["sessions_with_implausible_playback"] == 2
+    assert list(apply_exclusions(df, implausible_playback=2).table["session"]) == ["S2"]
+    off = apply_exclusions(df, implausible_playback=0)
+    assert off.table.empty
+    assert off.summary["sessions_with_implausible_playback"] == 2       # still reported
+    with pytest.raises(ValueError, match="implausible_playback"):
+        apply_exclusions(df, implausible_playback=-1)
+
+
+def test_implausible_playback_without_the_column_excludes_nobody():
+    r = apply_exclusions(frame(session("P1", "S1")))
+    assert r.table.empty
+    assert r.summary["sessions_with_implausible_playback"] == 0

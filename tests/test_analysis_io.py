@@ -186,3 +186,15 @@ def test_battles_bad_winner(tmp_path):
         read_any(p)
     assert (info.value.line, info.value.field) == (3, "winner")
     assert "'draw'" in str(info.value)
+
+
+def test_playback_implausible_column_is_optional_and_checked(tmp_path):
+    header = HEADER + ",playback_implausible"
+    lines = [line + (",1" if i == 0 else ",0" if i < 5 else ",") for i, line in enumerate(GOOD)]
+    df = read_results(write(tmp_path, lines, header=header))
+    assert list(df["playback_implausible"]) == ["1", "0", "0", "0", "0", ""]
+    assert set(read_results(write(tmp_path, GOOD, name="old.csv"))["playback_implausible"]) == {""}
+    lines[2] = lines[2][:-1] + "yes"
+    e = err(tmp_path, lines, header=header)
+    assert (e.line, e.field) == (4, "playback_implausible")
+    assert "'yes'" in str(e)

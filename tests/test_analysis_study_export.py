@@ -29,9 +29,10 @@ def test_study_app_export_is_analysed(tmp_path):
     path.write_bytes(r.data)
 
     out = tmp_path / "analysis"
-    # The simulated clients rate at random, so BS.1534 post-screening would drop everyone.
+    # The simulated clients rate at random, so BS.1534 post-screening would drop everyone; they fetch no
+    # video and answer in milliseconds, so the server flags their playback (tested in test_study_abuse.py).
     res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(out), "--bootstrap", "50",
-                                    "--no-mushra-screening"])
+                                    "--no-mushra-screening", "--implausible-playback", "off"])
     assert res.exit_code == 0, res.output
 
     # Independent count from the export: finished sessions, no training, no checks.
@@ -53,6 +54,6 @@ def test_study_app_export_is_analysed(tmp_path):
     mismatch = pd.read_csv(out / "mismatch.csv", keep_default_na=False)
     assert set(mismatch["condition"]) == {"SYSALPHA", "SYSBETA"}
     excl = pd.read_csv(out / "exclusions.csv", keep_default_na=False)
-    assert set(excl.loc[excl["participant"] == "pfail0001", "reason"]) == {"session_failed", "attention_checks"}
+    assert set(excl.loc[excl["participant"] == h.valid_pid("pfail0001"), "reason"]) == {"session_failed", "attention_checks"}
     assert (out / "ratings.csv").is_file()
     assert (out / "likert_means.csv").is_file()

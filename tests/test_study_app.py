@@ -80,10 +80,11 @@ def test_full_sessions_export_equals_answers(study_dir, db_url):
     assert len(keys) == len(set(keys))                                  # no duplicated judgement
     assert set(keys) == h.expected_rows(app, [done, failed, partial])     # exactly the answers given
     status = {r["participant"]: r["session_status"] for r in rows}
-    assert status == {"pfinish01": "finished", "pfail0001": "failed", "ppartial1": "incomplete"}
+    pid = h.valid_pid
+    assert status == {pid("pfinish01"): "finished", pid("pfail0001"): "failed", pid("ppartial1"): "incomplete"}
     checks = [r for r in rows if r["is_attention_check"] == "1"]
     assert {(r["participant"], r["attention_passed"]) for r in checks} == {
-        ("pfinish01", "1"), ("pfail0001", "0")}
+        (pid("pfinish01"), "1"), (pid("pfail0001"), "0")}
     assert all(r["is_training"] == "1" for r in rows if r["page"].startswith("training"))
     for r in rows:
         assert int(r["rt_ms"]) >= 0
@@ -285,7 +286,7 @@ def test_admin_needs_the_token(study_dir, sqlite_url):
     assert client.post("/admin/login", data={"token": h.ADMIN, "csrf_token": csrf}).status_code == 302
     h.run_participant(app, app.test_client(), "padmin001", np.random.default_rng(2), fail_checks=1)
     page = client.get("/admin/").get_data(as_text=True)
-    assert "padmin001" in page
+    assert h.valid_pid("padmin001") in page
     assert "SYSALPHA vs SYSBETA" in page
     assert "plan-0000" in page
     assert client.get("/admin/export/results.csv").status_code == 200
@@ -314,7 +315,7 @@ def test_reentry_resumes_or_is_refused_but_never_restarts(study_dir, db_url):
     assert r.status_code == 409
     assert "cannot take part" in r.get_data(as_text=True)
     with store_of(app).Session() as db:
-        assert db.query(ParticipantSession).filter_by(participant="preent001").count() == 1
+        assert db.query(ParticipantSession).filter_by(participant=h.valid_pid("preent001")).count() == 1
 
 
 def test_resume_disabled_refuses_reentry(study_dir, sqlite_url):
@@ -326,7 +327,11 @@ def test_resume_disabled_refuses_reentry(study_dir, sqlite_url):
     st = load_study(study_dir / "noresume.yaml")
     write_plans(build_plans(st), default_plans_path(st))
     app = make_app(study_dir, sqlite_url, study_file="noresume.yaml")
+    first = h.Participant(app.test_client(), "pnores001", "gesture-noresume")
+    assert first.enter().status_code == 302
+    # opening the link again before starting (consent) is not a restart
     assert h.Participant(app.test_client(), "pnores001", "gesture-noresume").enter().status_code == 302
+    assert first.consent().status_code == 200
     r = h.Participant(app.test_client(), "pnores001", "gesture-noresume").enter()
     assert r.status_code == 409
     assert "already started" in r.get_data(as_text=True)
@@ -374,6 +379,7 @@ def test_expired_reservation_is_released_and_cannot_restart(study_dir, db_url):
     store = store_of(app)
     a = h.Participant(app.test_client(), "pexpire01")
     a.enter()
+    a.consent()                  # the plan is reserved when the participant starts
     with store.Session.begin() as db:
         sess = db.get(ParticipantSession, a.sid)
         plan = db.get(Plan, sess.plan_id)
@@ -381,6 +387,7 @@ def test_expired_reservation_is_released_and_cannot_restart(study_dir, db_url):
         plan_id = plan.id
     b = h.Participant(app.test_client(), "pexpire02")
     b.enter()
+    b.consent()
     with store.Session() as db:
         assert db.get(ParticipantSession, b.sid).plan_id == plan_id
         assert db.get(ParticipantSession, a.sid).status == "expired"
@@ -393,7 +400,9 @@ def test_expired_reservation_is_released_and_cannot_restart(study_dir, db_url):
 def test_study_full(study_dir, sqlite_url):
     app = make_app(study_dir, sqlite_url)
     for i in range(6):
-        assert h.Participant(app.test_client(), f"pfull{i:04d}").enter().status_code == 302
+        p = h.Participant(app.test_client(), f"pfull{i:04d}")
+        assert p.enter().status_code == 302
+        assert p.consent().status_code == 200
     r = h.Participant(app.test_client(), "pfull9999").enter()
     assert r.status_code == 503
     assert "All places" in r.get_data(as_text=True)
@@ -402,7 +411,10 @@ def test_study_full(study_dir, sqlite_url):
 @pytest.mark.parametrize("url,code,text", [
     ("/start/gesture-test", 400, "lacks a valid PROLIFIC_PID"),
     ("/start/gesture-test?PROLIFIC_PID=a%20b&STUDY_ID=x&SESSION_ID=y", 400, "PROLIFIC_PID"),
-    ("/start/gesture-test?PROLIFIC_PID=abc&STUDY_ID=x", 400, "SESSION_ID"),
+    (f"/start/gesture-test?PROLIFIC_PID={'a' * 24}&STUDY_ID={'b' * 24}", 400, "SESSION_ID"),
+    ("/start/gesture-test?PROLIFIC_PID=abc&STUDY_ID=x&SESSION_ID=y", 400, "PROLIFIC_PID"),
+    (f"/start/gesture-test?PROLIFIC_PID={'g' * 24}&STUDY_ID={'b' * 24}&SESSION_ID=y", 400, "PROLIFIC_PID"),
+    (f"/start/gesture-test?PROLIFIC_PID={'a' * 24}&STUDY_ID=x&SESSION_ID=y", 400, "STUDY_ID"),
     ("/start/other-study?PROLIFIC_PID=abc&STUDY_ID=x&SESSION_ID=y", 404, ""),
     ("/start/gesture-test?PROLIFIC_PID=" + "a" * 65 + "&STUDY_ID=x&SESSION_ID=y", 400, "PROLIFIC_PID"),
 ])
@@ -440,10 +452,15 @@ def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
     r = client.get("/start/gesture-mturk?assignmentId=ASSIGNMENT_ID_NOT_AVAILABLE&hitId=H1")
     assert r.status_code == 200
     assert 'id="preview"' in r.get_data(as_text=True)
-    bad = client.get("/start/gesture-mturk?workerId=W1&assignmentId=A1&hitId=H1&turkSubmitTo=https://evil.example")
+    bad = client.get("/start/gesture-mturk?workerId=A1W2&assignmentId=A1&hitId=H1&turkSubmitTo=https://evil.example")
     assert bad.status_code == 400
     assert "turkSubmitTo" in bad.get_data(as_text=True)
-    r = client.get("/start/gesture-mturk?workerId=W1&assignmentId=A1&hitId=H1"
+    for bad_worker in ("W1", "a1w2", "A1-W2"):
+        r = client.get(f"/start/gesture-mturk?workerId={bad_worker}&assignmentId=A1&hitId=H1"
+                       "&turkSubmitTo=https%3A%2F%2Fworkersandbox.mturk.com")
+        assert r.status_code == 400
+        assert "workerId" in r.get_data(as_text=True)
+    r = client.get("/start/gesture-mturk?workerId=A1W2&assignmentId=A1&hitId=H1"
                    "&turkSubmitTo=https%3A%2F%2Fworkersandbox.mturk.com")
     assert r.status_code == 302
     # usable inside MTurk's iframe, also where third-party cookies are blocked
@@ -453,11 +470,11 @@ def test_mturk_entry_preview_and_submit_form(study_dir, sqlite_url):
     p = h.Participant(client, "W1")
     p.sid = sid
     rng = np.random.default_rng(0)
-    pages = h.plan_pages(app, sid)
     while True:
         r, data, csrf = p.page()
         if data is None:
             break
+        pages = h.plan_pages(app, sid)
         assert p.submit(data, csrf, h.make_answer(study_of(app), pages[data["index"]], rng)).status_code == 200
     html = r.get_data(as_text=True)
     assert 'action="https://workersandbox.mturk.com/mturk/externalSubmit"' in html
@@ -524,9 +541,9 @@ def test_answer_payloads_are_validated(study_dir, sqlite_url, desc, body, fragme
 
 
 def _walk_to(app, p, page_type, rng):
-    pages = h.plan_pages(app, p.sid)
     while True:
         _, data, csrf = p.page()
+        pages = h.plan_pages(app, p.sid)     # reserved with the first answer
         if data["type"] == page_type and not pages[data["index"]].get("check"):
             return data, csrf, pages[data["index"]]
         p.submit(data, csrf, h.make_answer(study_of(app), pages[data["index"]], rng))

@@ -267,9 +267,10 @@ def test_plans_are_balanced(folder):
         assert pages[4]["page"] == "training-01"
         hl = [p for p in pages if p.get("block") == "hl" and not p["training"]]
         assert len(hl) == 4
-        assert hl[2]["check"]
-        assert not any(p["check"] for i, p in enumerate(hl) if i != 2)
-        assert by_file[hl[2]["a"]].kind == "attention"
+        at = [i for i, p in enumerate(hl) if p["check"]]
+        assert len(at) == 1
+        assert 1 <= at[0] <= 3                    # configured at 2, moved by up to attention_window (2)
+        assert by_file[hl[at[0]]["a"]].kind == "attention"
         segs = [p["segment"] for p in hl if not p["check"]]
         assert len(set(segs)) == len(segs)                       # no segment twice in a block
         for p in hl:
@@ -286,8 +287,7 @@ def test_plans_are_balanced(folder):
             assert b.mismatched
             assert a.segment == b.segment == p["segment"]
         ratings = [p for p in pages if p.get("block") == "ratings"]
-        assert "check_slot" in ratings[1]
-        assert "check_slot" not in ratings[0]
+        assert ["check_slot" in p for p in ratings] in ([False, True, False], [False, False, True])
         for p in ratings:
             assert {by_file[f].segment for f in p["slots"]} == {p["segment"]}
             assert p["roles"].count("reference") == 1
@@ -296,7 +296,7 @@ def test_plans_are_balanced(folder):
     assert len(pair_counts) == 3
     assert set(pair_counts.values()) == {12}
     assert set(side_counts.values()) == {6}
-    assert len(check_positions) == 1                              # checks at configured positions
+    assert len(check_positions) > 1                               # checks move per session (window)
     rep = balance_report(plans, study)
     assert set(rep["pairs"].values()) == {6}
     # deterministic

@@ -111,7 +111,7 @@ def test_a_participant_id_alone_does_not_open_someone_elses_session(app):
     victim = _entered(app, "5f3a1c9e8b7d6a5f4e3d2c10")
     # a fresh browser with the victim's Prolific id but another study session id
     attacker = h.Participant(app.test_client(), "5f3a1c9e8b7d6a5f4e3d2c10")
-    r = attacker.get("/start/gesture-test?PROLIFIC_PID=5f3a1c9e8b7d6a5f4e3d2c10&STUDY_ID=st5f3a1c9e8b7d6a5f4e3d2c10"
+    r = attacker.get("/start/gesture-test?PROLIFIC_PID=5f3a1c9e8b7d6a5f4e3d2c10&STUDY_ID=5e0000000000000000000001"
                      "&SESSION_ID=forged")
     assert r.status_code == 409
     assert "already in progress" in r.get_data(as_text=True)

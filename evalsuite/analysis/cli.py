@@ -22,6 +22,15 @@ def _attention(value):
     return k
 
 
+def _playback(value):
+    text = str(value).strip().lower()
+    if text == "off":
+        return 0
+    if not text.isdigit():
+        raise click.BadParameter(f"{value!r}: expected a count of pages (0 or 'off': no exclusion)")
+    return int(text)
+
+
 @click.command()
 @click.argument("results", type=click.Path(dir_okay=False, path_type=pathlib.Path))
 @click.option("-o", "--out", "out_dir", type=click.Path(file_okay=False, path_type=pathlib.Path),
@@ -43,6 +52,9 @@ def _attention(value):
               show_default=True, help="A participant id with several sessions: keep the earliest or drop all.")
 @click.option("--no-mushra-screening", is_flag=True,
               help="Skip BS.1534-3 post-screening (hidden reference < 90 on > 15% of items).")
+@click.option("--implausible-playback", default="1", show_default=True, callback=lambda c, p, v: _playback(v),
+              help="Exclude a session with at least this many pages the study server flagged playback_implausible "
+                   "(a video never fetched, or answered faster than the clips last); 'off' = 0 = keep them.")
 @click.option("--zero-method", type=click.Choice(["wilcox", "pratt", "zsplit"]), default="wilcox",
               show_default=True, help="Wilcoxon handling of equal paired ratings.")
 @click.option("--bootstrap", "n_boot", type=click.IntRange(0), default=1000, show_default=True,
@@ -58,8 +70,8 @@ def _attention(value):
               help="summary.csv of `evalsuite score`: adds a 'Metrics vs humans' section and correlations.csv "
                    "(see `evalsuite correlate`).")
 def analyze(results, out_dir, study, tie_policy, ci_method, holm_per_question, alpha, attention_fails,
-            keep_incomplete, duplicates, no_mushra_screening, zero_method, n_boot, seed, mismatch_suffix,
-            no_figures, blind, reveal, scores=None):
+            keep_incomplete, duplicates, no_mushra_screening, implausible_playback, zero_method, n_boot, seed,
+            mismatch_suffix, no_figures, blind, reveal, scores=None):
     """Analyse RESULTS (a study's results.csv or a battles CSV).
 
     Applies the exclusion rules, then runs the tests that fit the data: pairwise
@@ -81,6 +93,7 @@ def analyze(results, out_dir, study, tie_policy, ci_method, holm_per_question, a
                            holm_scope="question" if holm_per_question else "study", alpha=alpha,
                            attention_fails=attention_fails, keep_incomplete=keep_incomplete,
                            duplicates=duplicates, mushra_screening=not no_mushra_screening,
+                           implausible_playback=implausible_playback,
                            zero_method=zero_method, n_boot=n_boot, seed=seed, mismatch_suffix=mismatch_suffix,
                            study=study, figures=not no_figures, scores=str(scores) if scores else None)
     run(results, out_dir, opts, blind=blind, reveal=reveal, echo=click.echo)

@@ -14,6 +14,10 @@ Rules (each can exclude a whole session; a session may collect several reasons):
   "reference"``) was rated below 90 on more than 15 % of the session's MUSHRA items
   (an item = one page x question holding a hidden reference). The rule counts items per
   assessor; it does not drop an assessor for a single low reference rating.
+- ``implausible_playback``: at least ``implausible_playback`` pages of the session (default 1; 0 = off)
+  are flagged ``playback_implausible`` by the study server (a video never fetched, or less time on the page
+  than its clips last: the media were not really played, whatever the browser reported). Training and
+  attention-check pages count too: the flag is about the participant, not the judgement.
 
 Rows removed from every analysis without excluding anyone: training pages and the
 attention-check trials themselves.
@@ -94,11 +98,13 @@ def _session_order(df: pd.DataFrame) -> pd.DataFrame:
 
 def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incomplete: bool = False,
                      duplicates: str = "keep-first", mushra_screening: bool = True,
-                     reference_threshold: float = 90.0, reference_max_fraction: float = 0.15
-                     ) -> ExclusionResult:
+                     reference_threshold: float = 90.0, reference_max_fraction: float = 0.15,
+                     implausible_playback: int = 1) -> ExclusionResult:
     """Apply the exclusion rules (module docstring) and return the rows to analyse."""
     if attention_fails < 1:
         raise ValueError("attention_fails must be >= 1 (1 = exclude on any failed check)")
+    if implausible_playback < 0:
+        raise ValueError("implausible_playback must be >= 0 (0 = off)")
     if duplicates not in ("keep-first", "drop-all"):
         raise ValueError("duplicates must be 'keep-first' or 'drop-all'")
     records = []
@@ -153,6 +159,16 @@ def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incompl
                             f"{row['n_items']} items ({100 * row['fraction']:.0f}% > "
                             f"{100 * reference_max_fraction:g}%)"))
 
+    # Playback the server found implausible (pages, not rows: a page has a row per question or slot).
+    pb = df["playback_implausible"] if "playback_implausible" in df.columns else pd.Series("", index=df.index)
+    flagged = df[pb == "1"].groupby(["participant", "session"], sort=False)["page"].nunique()
+    judged = df[pb != ""].groupby("session")["page"].nunique()
+    if implausible_playback:
+        for (part, sess), n in flagged[flagged >= implausible_playback].items():
+            records.append((part, sess, "implausible_playback",
+                            f"{n} of {judged[sess]} pages with media answered without fetching every video or "
+                            f"faster than its clips last (limit: {implausible_playback})"))
+
     table = pd.DataFrame(records, columns=EXCLUSION_COLUMNS)
     order = {s: i for i, s in enumerate(sessions["session"])}
     table = table.sort_values("session", key=lambda s: s.map(order), kind="stable").reset_index(drop=True)
@@ -176,5 +192,7 @@ def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incompl
         "duplicates": duplicates,
         "keep_incomplete": keep_incomplete,
         "mushra_screening": mushra_screening,
+        "implausible_playback": implausible_playback,
+        "sessions_with_implausible_playback": int(flagged.index.get_level_values("session").nunique()),
     }
     return ExclusionResult(data=data.reset_index(drop=True), table=table, summary=summary)

@@ -186,6 +186,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
     for flag in ("is_training", "is_attention_check"):
         _check_allowed(df, all_rows, flag, ("0", "1"), path)
     _check_allowed(df, all_rows, "attention_passed", ("0", "1", ""), path)
+    _check_allowed(df, all_rows, "playback_implausible", ("0", "1", ""), path)
     _check_int(df, all_rows & (df["trial"] != ""), "trial", path, lo=0)
     _check_int(df, all_rows, "rt_ms", path, lo=0, allow_empty=True)
 
@@ -329,6 +330,7 @@ def read_battles(path) -> pd.DataFrame:
         "is_attention_check": 0,
         "attention_expected": "",
         "attention_passed": "",
+        "playback_implausible": "",
         "shown_at": "",
         "answered_at": "",
         "value": np.nan,

@@ -31,6 +31,7 @@ class AnalysisOptions:
     keep_incomplete: bool = False
     duplicates: str = "keep-first"
     mushra_screening: bool = True
+    implausible_playback: int = 1
     zero_method: str = "wilcox"
     n_boot: int = 1000
     seed: int = 42
@@ -77,7 +78,8 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
         echo("Blind analysis: condition names are replaced by codes (B01, ...); run with --reveal to unblind.")
 
     excl = apply_exclusions(raw, attention_fails=opt.attention_fails, keep_incomplete=opt.keep_incomplete,
-                            duplicates=opt.duplicates, mushra_screening=opt.mushra_screening)
+                            duplicates=opt.duplicates, mushra_screening=opt.mushra_screening,
+                            implausible_playback=opt.implausible_playback)
     res.exclusions = excl
     data = excl.data
     s = excl.summary
@@ -184,6 +186,8 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
         ("attention checks", "exclude on any failure" if opt.attention_fails == 1
          else f"exclude at >= {opt.attention_fails} failures"),
         ("BS.1534-3 post-screening", "on" if opt.mushra_screening else "off"),
+        ("implausible playback", (f"exclude at >= {opt.implausible_playback} flagged pages" if opt.implausible_playback
+                                  else "off") + f" ({s['sessions_with_implausible_playback']} sessions flagged)"),
         ("bootstrap", f"{opt.n_boot} participant resamples, seed {opt.seed}"),
     ], columns=["setting", "value"])
     head = []
@@ -198,6 +202,11 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
           f"({s['participants_included']} participants, {s['rows_analysed']} judgements). "
           f"Removed rows: {s['training_rows_removed']} training, "
           f"{s['attention_check_rows_removed']} attention-check trials.</p>"]
+    if s["sessions_with_implausible_playback"]:
+        ex.append(f"<p>{s['sessions_with_implausible_playback']} sessions have pages with implausible playback "
+                  "(media never fetched, or answered faster than the clips last); "
+                  + ("they are excluded (implausible_playback)." if opt.implausible_playback else
+                     "the rule is off (--implausible-playback), so they are analysed.") + "</p>")
     if s["reasons"]:
         ex.append(report.html_table(pd.DataFrame(sorted(s["reasons"].items()), columns=["reason", "sessions"])))
     ex.append(report.html_table(T["exclusions"]) if not T["exclusions"].empty else "<p>Nobody was excluded.</p>")

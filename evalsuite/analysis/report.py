@@ -175,9 +175,10 @@ def fig_elo(elo: pd.DataFrame, question: str):
     fig, ax = plt.subplots(figsize=(7, 0.45 * len(sub) + 1.5))
     y = np.arange(len(sub))
     have_ci = np.isfinite(sub["ci_low"].astype(float)).to_numpy()
-    err = np.vstack([sub["elo"] - sub["ci_low"], sub["ci_high"] - sub["elo"]])
-    err = np.where(have_ci, err, 0.0)
-    ax.errorbar(sub["elo"], y, xerr=err, fmt="o", capsize=4, color="#4c72b0")
+    # A bootstrap percentile interval need not contain the estimate (few participants): drawn as a line
+    # from its low to its high end, not as error bars around the estimate.
+    ax.hlines(y[have_ci], sub["ci_low"][have_ci], sub["ci_high"][have_ci], color="#4c72b0")
+    ax.plot(sub["elo"], y, "o", color="#4c72b0")
     ax.set_yticks(y, sub["condition"])
     ax.axvline(1000, color="0.5", lw=0.8, ls="--")
     ax.set_xlabel("Elo (Bradley-Terry MLE, 95% participant-bootstrap CI)")

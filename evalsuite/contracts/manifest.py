@@ -2,7 +2,8 @@
 
 Written by ``evalsuite render stimuli`` (:mod:`renderers.stimuli`, all of :data:`COLUMNS`), read by the study
 app (:func:`study_app.definition.load_manifest`), which needs :data:`REQUIRED` and reads the optional
-``kind``, ``expected``, ``motion_segment`` and ``block``. A hand-made manifest needs only the required ones.
+``kind``, ``expected``, ``motion_segment``, ``block`` and ``duration_s`` (seconds; the server checks time on
+a page against it). A hand-made manifest needs only the required ones.
 """
 from __future__ import annotations
 

@@ -17,6 +17,7 @@ A :class:`PageKind` owns everything about one ``type`` of page in a study defini
 from __future__ import annotations
 
 import math
+import random
 from abc import abstractmethod
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -120,7 +121,8 @@ class BlockKind(PageKind):
     """A rating block: conditions x segments, expanded into balanced trial pages (see study_app.design)."""
 
     block = True
-    keys: ClassVar[tuple[str, ...]] = ("conditions", "segments", "pages", "attention_checks", "muted")
+    keys: ClassVar[tuple[str, ...]] = ("conditions", "segments", "pages", "attention_checks", "attention_window",
+                                       "muted")
 
     def min_conditions(self, page: dict) -> int:
         return 2
@@ -147,8 +149,20 @@ class BlockKind(PageKind):
     def check_page(self, block: Page, k: int, pool: list[Stimulus], lookup: Any) -> dict:
         """The ``k``-th attention-check page of this block (over all sessions)."""
 
+    def session_check_page(self, block: Page, k: int, pool: list[Stimulus], lookup: Any, rated: list[dict],
+                           rng: random.Random) -> dict:
+        """The ``k``-th check page, knowing the session's trial pages of the block (``rated``) and a generator
+        seeded for the session (``rng``). Default: :meth:`check_page`; a kind overrides it to make its checks
+        less predictable (e.g. MUSHRA: a segment the session does not rate, the check clip in a random slot)."""
+        return self.check_page(block, k, pool, lookup)
+
     def balance(self, spec: dict, by_file: dict, counts: dict) -> None:
         """Add this trial page to the balance counts (``counts``: name -> Counter)."""
+
+    def material(self, study: Study, spec: dict) -> frozenset[str]:
+        """What a page shows, regardless of order or side: the set of its media files. A practice page
+        must not show the material of a page the participant rates for real."""
+        return frozenset(f for k in range(self.n_slots(spec)) if (f := self.media(study, spec, k).file))
 
     def page_data(self, study: Study, spec: dict, cfg: dict) -> dict:
         return {"training": bool(spec.get("training")), "muted": cfg["muted"]}
@@ -212,6 +226,8 @@ class BlockKind(PageKind):
         if len(set(checks)) != len(checks):
             chk.fail(f"{where}.attention_checks", "expected distinct positions")
         cfg["attention_checks"] = sorted(checks)
+        # Each session moves each check up to this many pages from its position (never to the first page).
+        cfg["attention_window"] = chk.int_range(page, "attention_window", where, 0, 1000, default=2)
         if checks:
             block_id = page["id"] if isinstance(page.get("id"), str) else ""
             if not self.attention_pool(manifest, block_id, cfg):

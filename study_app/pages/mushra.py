@@ -91,6 +91,22 @@ class MushraKind(BlockKind):
         page["check_slot"] = slot
         return page
 
+    def session_check_page(self, block: Any, k: int, pool: list, lookup: Any, rated: list[dict], rng: Any) -> dict:
+        """A check page that is not a rated page with one clip swapped: the check clip of a segment the session
+        does not rate in this block when the pool has one (else the next in turn), the other clips of that
+        segment in a random order, the check clip in a random slot (never the hidden reference or anchor)."""
+        rated_segments = {p["segment"] for p in rated}
+        turn = pool[k % len(pool):] + pool[:k % len(pool)]
+        check = next((c for c in turn if c.segment not in rated_segments), turn[0])
+        cfg = block.cfg
+        slots = [(c, "") for c in cfg["conditions"]] + [(cfg[r], r) for r in ("reference", "anchor") if cfg.get(r)]
+        rng.shuffle(slots)
+        slot = rng.choice([i for i, (_, role) in enumerate(slots) if not role])
+        files = [lookup.file(c, check.segment) for c, _ in slots]
+        files[slot] = check.file
+        return {"type": "mushra", "segment": check.segment, "slots": files, "roles": [r for _, r in slots],
+                "check_slot": slot}
+
     def balance(self, spec: dict, by_file: dict, counts: dict) -> None:
         for k, f in enumerate(spec["slots"]):
             if k != spec.get("check_slot"):

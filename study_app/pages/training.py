@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from study_app.errors import StudyDefinitionError
 from study_app.pages.base import PageKind
 
 
@@ -21,18 +22,47 @@ class TrainingKind(PageKind):
             chk.fail(f"pages[{index}].of", f"expected the id of a pairwise, mushra or likert page, "
                      f"got {page.cfg['of']!r}")
         target = blocks[page.cfg["of"]]
+        kind = study.kind_of(target)
+        stimuli = [st for st in study.manifest.stimuli if st.kind == "stimulus"]
+        have = {(st.condition, st.segment, st.mismatched) for st in stimuli}
+        needed = kind.shown_conditions(target.cfg)
         for j, s in enumerate(page.cfg["segments"] or []):
-            if s not in target.cfg["segments"]:
+            # Practice may use segments the block itself does not rate, as long as they have its stimuli.
+            ok = all((c, s, False) in have for c in needed)
+            if kind.needs_mismatched(target.cfg):
+                ok = ok and all((c, s, True) in have for c in needed)
+            if not ok:
                 chk.fail(f"pages[{index}].segments[{j}]", f"segment {s!r} has no stimulus for every "
                          f"condition of {target.id!r}")
 
     def plan_pages(self, page: Any, session: int, plan: Any) -> list[dict]:
+        """``count`` practice pages of the block, balanced like its pages, skipping any page whose material
+        the session rates for real (``plan.rated``) or already practises."""
         block = plan.study.blocks[page.cfg["of"]]
         n = page.cfg["count"]
         segments = page.cfg["segments"] or block.cfg["segments"]
         kind = plan.kind(block.type)
-        return [{"page": f"{page.id}-{j + 1:02d}", "block": block.id, "training": True, "check": False,
-                 **kind.regular_page(block, session * n + j, plan.lookup, segments)} for j in range(n)]
+        out: list[dict] = []
+        used = set(plan.rated)
+        g = session * n
+        for _ in range(MAX_CANDIDATES):
+            if len(out) == n:
+                break
+            cand = kind.regular_page(block, g, plan.lookup, segments)
+            g += 1
+            material = kind.material(plan.study, cand)
+            if material in used:
+                continue
+            used.add(material)
+            out.append({"page": f"{page.id}-{len(out) + 1:02d}", "block": block.id, "training": True,
+                        "check": False, **cand})
+        if len(out) < n:
+            raise StudyDefinitionError(
+                f"session {session}: no practice material left that the participant does not rate for real "
+                f"in {block.id!r}; give the training page segments of its own (segments: [...])",
+                path=plan.study.path, field=f"pages[{plan.study.pages.index(page)}].segments")
+        return out
 
 
+MAX_CANDIDATES = 10_000
 KIND = TrainingKind()

@@ -1,0 +1,135 @@
+"""The record of which media slots a session fetched (the server's evidence for :mod:`study_app.playback`).
+
+A video request must not wait for the database: it records its slot once (a memory set remembers what is
+recorded), without waiting for the disk (SQLite ``synchronous=NORMAL`` for that transaction: in WAL mode it
+survives a crash of the server, not of the machine; PostgreSQL ``synchronous_commit`` off), and on SQLite
+without waiting for the write lock either: when another writer holds it, the record is queued and a
+background thread of the process writes the queue in one transaction a moment later. A server killed in
+that moment loses those records (the page may then be flagged); answers are never written this way.
+"""
+from __future__ import annotations
+
+import atexit
+import logging
+import sqlite3
+import threading
+import time
+import weakref
+
+from sqlalchemy import text
+from sqlalchemy.exc import DBAPIError, IntegrityError
+
+__all__ = ["MediaLog"]
+
+log = logging.getLogger(__name__)
+INSERT = ("INSERT OR IGNORE INTO media_requests (session_id, page_index, slot, first_at) VALUES (?, ?, ?, ?)")
+
+
+class MediaLog:
+    def __init__(self, engine, session_factory, model) -> None:
+        self.engine, self.Session, self.model = engine, session_factory, model
+        self.sqlite = engine.dialect.name == "sqlite"
+        self.recorded: set[tuple[str, int, int]] = set()
+        self._pending: list[tuple[str, int, int, object]] = []
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        _LOGS.add(self)
+
+    def record(self, session_id: str, page_index: int, slot: int, now) -> None:
+        key = (session_id, page_index, slot)
+        if key in self.recorded:
+            return
+        row = (*key, now)
+        try:
+            if self.sqlite:
+                if not self._sqlite_insert([row], wait=False):
+                    self._defer(row)
+            elif self.engine.dialect.name == "postgresql":
+                from sqlalchemy.dialects.postgresql import insert as pg_insert
+                with self.Session.begin() as db:
+                    db.execute(text("SET LOCAL synchronous_commit TO OFF"))
+                    db.execute(pg_insert(self.model).values(session_id=session_id, page_index=page_index,
+                                                            slot=slot, first_at=now).on_conflict_do_nothing())
+            else:
+                try:
+                    with self.Session.begin() as db:
+                        db.add(self.model(session_id=session_id, page_index=page_index, slot=slot, first_at=now))
+                except IntegrityError:
+                    pass        # a concurrent request (another range of the same video) recorded it
+        except (DBAPIError, sqlite3.Error) as exc:
+            # The video is served all the same; a later request of it records it.
+            log.warning("could not record a media request of session %s: %s", session_id, exc)
+            return
+        if len(self.recorded) > 200_000:
+            self.recorded.clear()
+        self.recorded.add(key)
+
+    def flush(self) -> None:
+        """Write what is queued now (exports call this, so that they see this process's records)."""
+        with self._lock:
+            rows, self._pending = self._pending, []
+        if rows:
+            try:
+                self._sqlite_insert(rows, wait=True)
+            except sqlite3.Error as exc:
+                log.warning("could not record %d media requests: %s", len(rows), exc)
+
+    def _defer(self, row) -> None:
+        with self._lock:
+            self._pending.append(row)
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(target=self._run, name="evalsuite-media-log", daemon=True)
+                self._thread.start()
+
+    def _run(self) -> None:
+        idle = 0
+        while idle < 100:                     # ends after ~5 s without work; started again on demand
+            time.sleep(0.05)
+            with self._lock:
+                busy = bool(self._pending)
+            if busy:
+                idle = 0
+                self.flush()
+            else:
+                idle += 1
+
+    def _sqlite_insert(self, rows: list, wait: bool) -> bool:
+        """Insert ``rows`` in one transaction; without ``wait``, give up at once (False) if another writer
+        holds the lock."""
+        raw = self.engine.raw_connection()
+        restored = False
+        try:
+            con = raw.dbapi_connection
+            cur = con.cursor()
+            cur.execute("PRAGMA synchronous=NORMAL")          # not allowed inside a transaction
+            if not wait:
+                cur.execute("PRAGMA busy_timeout=0")
+            try:
+                cur.execute("BEGIN IMMEDIATE")
+                cur.executemany(INSERT, [(s, p, k, t.strftime("%Y-%m-%d %H:%M:%S.%f")) for s, p, k, t in rows])
+                cur.execute("COMMIT")
+                return True
+            except sqlite3.OperationalError as exc:
+                if con.in_transaction:
+                    cur.execute("ROLLBACK")
+                if not wait and "locked" in str(exc):
+                    return False
+                raise
+            finally:
+                cur.execute("PRAGMA synchronous=FULL")
+                cur.execute("PRAGMA busy_timeout=60000")
+                restored = True
+                cur.close()
+        finally:
+            if not restored:
+                raw.invalidate()      # never hand a connection with the weaker settings back to the pool
+            raw.close()
+
+
+_LOGS: weakref.WeakSet[MediaLog] = weakref.WeakSet()
+
+
+@atexit.register
+def _flush_all() -> None:                     # a server stopped normally writes its queue first
+    for media_log in _LOGS:
+        media_log.flush()

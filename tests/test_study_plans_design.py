@@ -1,0 +1,145 @@
+"""Session plans that a participant cannot see through (issue 11's design findings): practice pages never
+show material the participant rates for real, and attention checks are not where, or what, one expects."""
+from __future__ import annotations
+
+from collections import Counter
+
+import pytest
+import study_helpers as h
+import yaml
+
+from study_app.definition import load_study
+from study_app.design import build_plans
+from study_app.errors import StudyDefinitionError
+from study_app.pages import get_block_kind
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    f = tmp_path_factory.mktemp("plans")
+    h.make_study(f)
+    return f
+
+
+def _variant(folder, mutate, name="variant.yaml", sessions=60):
+    data = yaml.safe_load((folder / "study.yaml").read_text())
+    data["sessions"] = sessions
+    mutate(data)
+    (folder / name).write_text(yaml.safe_dump(data))
+    return load_study(folder / name)
+
+
+def _material(study, page):
+    return get_block_kind(page["type"]).material(study, page)
+
+
+def _practice_overlaps(study, plans) -> int:
+    bad = 0
+    for plan in plans["plans"]:
+        rated = {_material(study, p) for p in plan["pages"] if "block" in p and not p["training"]}
+        practice = [_material(study, p) for p in plan["pages"] if p.get("training")]
+        assert len(set(practice)) == len(practice)              # no practice page twice either
+        bad += any(m in rated for m in practice)
+    return bad
+
+
+def test_practice_never_repeats_a_rated_trial(folder):
+    def more_practice(data):
+        data["pages"][4]["count"] = 2                           # two practice pages of the pairwise block
+        data["pages"].insert(5, {"type": "training", "id": "practice-ratings", "of": "ratings"})
+
+    study = _variant(folder, more_practice)
+    plans = build_plans(study)
+    assert _practice_overlaps(study, plans) == 0
+    for plan in plans["plans"]:
+        practice = [p for p in plan["pages"] if p.get("training")]
+        assert [p["block"] for p in practice] == ["hl", "hl", "ratings"]
+        rated_segments = {p["segment"] for p in plan["pages"] if p.get("block") == "ratings" and not p["training"]
+                          and not p["check"]}
+        assert practice[2]["segment"] not in rated_segments     # MUSHRA: a segment not rated for real
+    # practice is still spread over the block's items
+    pairs = Counter(_material(study, p) for plan in plans["plans"] for p in plan["pages"] if p.get("block") == "hl"
+                    and p["training"])
+    assert len(pairs) >= 6
+
+
+def test_practice_in_the_demo_study(tmp_path):
+    from study_app.demo import _stimuli, study_definition
+
+    target = tmp_path / "study"
+    target.mkdir()
+    manifest = _stimuli(tmp_path, target, lambda *a: None)
+    (target / "study.yaml").write_text(yaml.safe_dump(study_definition(manifest, target), sort_keys=False))
+    study = load_study(target / "study.yaml")
+    for sessions in (study.sessions, 40):
+        study.sessions = sessions
+        assert _practice_overlaps(study, build_plans(study)) == 0
+
+
+def test_practice_without_material_of_its_own_is_a_build_error(folder):
+    def impossible(data):
+        ratings = next(p for p in data["pages"] if p["id"] == "ratings")
+        ratings["pages"] = 3                                    # every segment rated for real
+        data["pages"].insert(5, {"type": "training", "id": "practice-ratings", "of": "ratings"})
+
+    study = _variant(folder, impossible, "impossible.yaml", sessions=2)
+    with pytest.raises(StudyDefinitionError, match="no practice material left") as err:
+        build_plans(study)
+    assert "pages[5].segments" in str(err.value)
+
+
+def _checks(plan, block):
+    pages = [p for p in plan["pages"] if p.get("block") == block and not p["training"]]
+    return pages, [i for i, p in enumerate(pages) if p["check"]]
+
+
+def test_attention_checks_move_within_a_window_per_session(folder):
+    study = _variant(folder, lambda d: None, "window.yaml")
+    plans = build_plans(study)
+    assert build_plans(study) == plans                           # seeded: the same plans on every build
+    for block, configured in (("hl", 2), ("ratings", 1)):
+        seen = Counter()
+        for plan in plans["plans"]:
+            _, at = _checks(plan, block)
+            assert len(at) == 1
+            assert at[0] != 0
+            assert abs(at[0] - configured) <= 2
+            seen[at[0]] += 1
+        assert len(seen) >= 2, (block, seen)                    # not the same place in every plan
+        assert set(seen) == set(range(max(1, configured - 2), min(configured + 2, 3 if block == "hl" else 2) + 1))
+    # another seed, other places; a window of 0 keeps the configured positions
+    other = _variant(folder, lambda d: d.update(seed=4), "seed4.yaml")
+    assert [_checks(p, "hl")[1] for p in build_plans(other)["plans"]] != [_checks(p, "hl")[1] for p in plans["plans"]]
+    fixed = _variant(folder, lambda d: next(p for p in d["pages"] if p["id"] == "ratings").update(attention_window=0),
+                     "fixed.yaml")
+    assert {tuple(_checks(p, "ratings")[1]) for p in build_plans(fixed)["plans"]} == {(1,)}
+
+
+def test_mushra_check_is_not_a_rated_page_with_one_clip_swapped(folder):
+    study = _variant(folder, lambda d: None, "mushra.yaml")
+    pool_segments = {s.segment for s in study.manifest.stimuli if s.kind == "attention"
+                     and get_block_kind("mushra").attention_fits(s, study.page("ratings").cfg)}
+    slots, repeats, avoidable = Counter(), 0, 0
+    for plan in build_plans(study)["plans"]:
+        pages, at = _checks(plan, "ratings")
+        check = pages[at[0]]
+        rated = [p for p in pages if not p["check"]]
+        slots[check["check_slot"]] += 1
+        assert check["roles"][check["check_slot"]] == ""         # never in place of the hidden reference
+        others = set(check["slots"]) - {check["slots"][check["check_slot"]]}
+        repeat = any(others <= set(p["slots"]) for p in rated)
+        repeats += repeat
+        if pool_segments - {p["segment"] for p in rated}:
+            avoidable += 1
+            assert not repeat                                    # a segment this participant does not rate
+    assert avoidable > 0
+    assert repeats == 60 - avoidable
+    assert len(slots) == 3                                       # the check clip in every non-reference slot
+
+
+def test_attention_window_is_validated(folder):
+    def bad(data):
+        next(p for p in data["pages"] if p["id"] == "hl")["attention_window"] = -1
+
+    with pytest.raises(StudyDefinitionError, match=r"attention_window"):
+        _variant(folder, bad, "badwindow.yaml")
