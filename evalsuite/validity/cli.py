@@ -12,10 +12,10 @@ import click
 
 from evalsuite.errors import InputError
 
-__all__ = ["validate_metrics", "run_validation", "ValidityRun", "FGD_SETTINGS"]
+__all__ = ["validate_metrics", "run_validation", "ValidityRun", "FGD_EPOCHS"]
 
 # A small, fast encoder: 1 s windows at 30 fps, half-overlapping, a few epochs on the train split.
-FGD_SETTINGS = {"window": 30, "fps": 30.0, "epochs": 8, "architecture": "genea2023"}
+FGD_WINDOW, FGD_FPS, FGD_EPOCHS, FGD_ARCHITECTURE = 30, 30.0, 8, "genea2023"
 
 
 @dataclass
@@ -42,19 +42,19 @@ def _fgd_family(corpus: Any, out_dir: pathlib.Path, model: pathlib.Path | None, 
         if not train:
             raise InputError("the corpus has no train split with motion to train the FGD encoder on; give "
                              "--fgd-model MODEL or --no-fgd", path=corpus.root, field="--corpus")
-        net = train_model(train, joints="all", window=FGD_SETTINGS["window"], fps=FGD_SETTINGS["fps"],
-                          epochs=epochs, seed=seed, architecture=FGD_SETTINGS["architecture"], progress=False)
+        net = train_model(train, joints="all", window=FGD_WINDOW, fps=FGD_FPS, epochs=epochs, seed=seed,
+                          architecture=FGD_ARCHITECTURE, progress=False)
         model = out_dir / "fgd_model.pt"
         net.save(model)
         echo(f"  FGD encoder {net.short_hash} trained on {len(train)} natural train segments "
-             f"({FGD_SETTINGS['window']}-frame windows, {epochs} epochs) -> {model}")
+             f"({FGD_WINDOW}-frame windows, {epochs} epochs) -> {model}")
     return FGDFamily(model)
 
 
 def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, split: str = "val,test",
                    models: Sequence[str] = (), n_bootstrap: int = 200, seed: int = 0, fps: float = 30.0,
                    jobs: int = 1, fgd: bool = True, fgd_model: str | pathlib.Path | None = None,
-                   fgd_epochs: int = FGD_SETTINGS["epochs"], progress: bool = True,  # type: ignore[assignment]
+                   fgd_epochs: int = FGD_EPOCHS, progress: bool = True,
                    echo: Callable[[str], None] = lambda s: None) -> ValidityRun:
     """Generate the benchmark's conditions on a synthetic corpus, score them, and write the validity table."""
     from evalsuite.corpus import load_corpus
@@ -102,7 +102,7 @@ def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, 
     oracle = {r["metric"] for r in summary if r["condition"] == "oracle" and r["value"] == r["value"]}
     metrics = [m for m in dict.fromkeys(r["metric"] for r in summary) if m in oracle and m in better]
     conditions = [c.name for c in bench.conditions]
-    table = scoring.bootstrap_table(scored, conditions, metrics, n_bootstrap, seed, progress)
+    table = scoring.bootstrap_table(scored, conditions, metrics, n_bootstrap, seed, progress, jobs)
     timings["bootstrap_s"] = time.perf_counter() - t0
     results = analysis.analyse(table, conditions, metrics, better, bench.families)
 
@@ -141,7 +141,7 @@ def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, 
 @click.option("--no-fgd", is_flag=True, help="Skip FGD (it needs the learned extra: torch).")
 @click.option("--fgd-model", type=click.Path(exists=True, dir_okay=False, path_type=pathlib.Path), default=None,
               help="Use this FGD encoder instead of training a small one on the train split.")
-@click.option("--fgd-epochs", type=click.IntRange(min=1), default=FGD_SETTINGS["epochs"], show_default=True,
+@click.option("--fgd-epochs", type=click.IntRange(min=1), default=FGD_EPOCHS, show_default=True,
               help="Epochs of the small FGD encoder.")
 @click.option("--quiet", is_flag=True, help="No progress bars and no table.")
 def validate_metrics(corpus_dir: pathlib.Path, out_dir: pathlib.Path, split: str, models: tuple[str, ...],

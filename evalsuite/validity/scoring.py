@@ -1,12 +1,17 @@
-"""Scoring every condition once, keeping the per-segment records, and re-reducing them on resampled segments.
+"""Scoring every condition once, keeping the per-segment records, and bootstrap replicates over segments.
 
 The per-file work is the scoring engine's own (:func:`evalsuite.metrics.engine.score_sequence` on the
 shared executor), with every default metric family plus beat alignment and the speech-gesture coupling
 family (the corpus brings the speech) and any extra family (FGD). The records are kept, so a bootstrap
-replicate is exactly what ``evalsuite score`` would report on a resample of the segments:
-:func:`evalsuite.metrics.engine.reduce_results` on the resampled records. The resample is the same for
-every condition of a replicate (paired), and each drawn segment keeps the parity of its position among the
-sorted segments, so the cross-fitted CCA never fits and tests on copies of one segment.
+replicate is what ``evalsuite score`` would report on a resample of the segments, the same resample for
+every condition (paired). Two ways, one answer:
+
+* most families already compute their resampled values under resampling weights (the engine's own
+  bootstrap: means over sequences, pooled histograms, FD_g/FD_k, L1div); a reduce context that keeps those
+  values instead of only their percentiles gives them for every condition under one weight matrix;
+* the others (cross-fitted CCA, FGD) are reduced again on each replicate's resampled records
+  (:func:`evalsuite.metrics.engine.reduce_results`), each drawn segment at a position of the parity it has
+  among the sorted segments, so the cross-fitted CCA never fits and tests on copies of one segment.
 """
 from __future__ import annotations
 
@@ -153,14 +158,19 @@ def _reduce_weighted(scored: Scored, weights: np.ndarray) -> list[dict[str, Any]
     return rows
 
 
+def _rereduce(task: tuple[Any, ...]) -> np.ndarray:
+    """Values of replicates ``draws`` (rows of segment indices) by reducing resampled records again."""
+    plan, setup, results, draws, conditions, metrics = task
+    return np.concatenate([values_table([reduce_results(plan, setup, _resampled(results, d)).summary], conditions,
+                                        metrics) for d in draws])
+
+
 def bootstrap_table(scored: Scored, conditions: Sequence[str], metrics: Sequence[str], n_boot: int, seed: int,
-                    progress: bool = True) -> np.ndarray:
+                    progress: bool = True, jobs: int = 1) -> np.ndarray:
     """``(1 + n_boot, conditions, metrics)``: row 0 the values on every segment, then ``n_boot`` paired
     bootstrap replicates over segments (seeded). Metrics whose family gives its resampled values under
     weights (means over sequences, pooled histograms, FD_g/FD_k, L1div) are computed so; the others (CCA,
     FGD) by reducing each replicate's resampled records again."""
-    from tqdm.auto import tqdm
-
     n = len(scored.results)
     if n < 2 and n_boot:
         raise InputError(f"a bootstrap over segments needs at least 2 segments, got {n}", field="--split")
@@ -181,11 +191,13 @@ def bootstrap_table(scored: Scored, conditions: Sequence[str], metrics: Sequence
                 missing.add(r["metric"])
     if missing and n_boot:
         setup = dataclasses.replace(scored.result.setup, metrics=sorted(missing))
-        for b in tqdm(range(n_boot), desc="bootstrap " + ", ".join(sorted(missing)), unit="resample",
-                      disable=not progress, leave=False):
-            again = reduce_results(scored.result.plan, setup, _resampled(scored.results, draws[b]))
-            table[1 + b] = np.where(np.isnan(table[1 + b]), values_table([again.summary], conditions, metrics)[0],
-                                    table[1 + b])
+        chunks = np.array_split(np.arange(n_boot), max(1, min(n_boot, 2 * jobs)))
+        tasks = [(scored.result.plan, setup, scored.results, draws[c], list(conditions), list(metrics))
+                 for c in chunks if len(c)]
+        parts = run(_rereduce, tasks, jobs=jobs, progress=progress, weights=[len(c) for c in chunks if len(c)],
+                    desc="bootstrap " + ", ".join(sorted(missing)))
+        again = np.concatenate(parts)
+        table[1:] = np.where(np.isnan(table[1:]), again, table[1:])
     return table
 
 
