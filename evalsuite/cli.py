@@ -32,6 +32,7 @@ COMMANDS = {
     "validate-metrics": "evalsuite.validity.cli:validate_metrics",
     # temporary: joins the `corpus` group (evalsuite/corpus/cli.py) as `evalsuite corpus synth`
     "corpus-synth": "evalsuite.corpus.synth_cli:synth",
+    "correlate": "evalsuite.analysis.correlate_cli:correlate",
 }
 
 

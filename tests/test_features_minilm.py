@@ -140,3 +140,17 @@ def test_missing_model_package_names_the_install_command(monkeypatch):
 def test_a_folder_without_weights_is_refused(tmp_path):
     with pytest.raises(InputError, match=r"config\.json: a BERT model folder needs config\.json and model\.safetensors"):
         BertEncoder(tmp_path)
+
+
+def test_a_user_bert_folder_with_only_vocab_txt_gives_the_same_vectors(tmp_path):
+    src = minilm_folder()
+    for name in ("config.json", "model.safetensors", "vocab.txt", "tokenizer_config.json"):
+        (tmp_path / name).symlink_to(src / name)
+    words = ["Raise", "your", "hand", "up", "high."]
+    mine = get_embedder(f"bert-static:{tmp_path}").embed(words)
+    ref = get_embedder("minilm-static").embed(words)
+    np.testing.assert_allclose(mine, ref, atol=1e-6)
+    ctx = extract("words_model", None, transcript=Transcript(tuple(Word(w, i * 0.25, i * 0.25 + 0.25)
+                                                                   for i, w in enumerate(words))),
+                  fps=4, cache=False, model=f"bert:{tmp_path}")
+    np.testing.assert_allclose(ctx, get_embedder("minilm").embed(words), atol=1e-5)

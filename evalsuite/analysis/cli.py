@@ -54,9 +54,12 @@ def _attention(value):
 @click.option("--blind", is_flag=True, help="Replace condition names by stable codes in every output; "
                                              "the folder stays blind until --reveal.")
 @click.option("--reveal", is_flag=True, help="End a blind analysis: real names, plus blind_key.csv (code -> name).")
+@click.option("--scores", type=click.Path(dir_okay=False, path_type=pathlib.Path), default=None,
+              help="summary.csv of `evalsuite score`: adds a 'Metrics vs humans' section and correlations.csv "
+                   "(see `evalsuite correlate`).")
 def analyze(results, out_dir, study, tie_policy, ci_method, holm_per_question, alpha, attention_fails,
             keep_incomplete, duplicates, no_mushra_screening, zero_method, n_boot, seed, mismatch_suffix,
-            no_figures, blind, reveal):
+            no_figures, blind, reveal, scores=None):
     """Analyse RESULTS (a study's results.csv or a battles CSV).
 
     Applies the exclusion rules, then runs the tests that fit the data: pairwise
@@ -70,10 +73,14 @@ def analyze(results, out_dir, study, tie_policy, ci_method, holm_per_question, a
 
     if not results.is_file():
         raise InputError("file not found (expected a results.csv or battles CSV)", path=results)
+    if scores is not None:
+        from evalsuite.analysis.correlate_io import read_scores
+
+        read_scores(scores)  # a malformed file stops here, before any statistic is computed
     opts = AnalysisOptions(tie_policy=tie_policy, ci_method=ci_method,
                            holm_scope="question" if holm_per_question else "study", alpha=alpha,
                            attention_fails=attention_fails, keep_incomplete=keep_incomplete,
                            duplicates=duplicates, mushra_screening=not no_mushra_screening,
                            zero_method=zero_method, n_boot=n_boot, seed=seed, mismatch_suffix=mismatch_suffix,
-                           study=study, figures=not no_figures)
+                           study=study, figures=not no_figures, scores=str(scores) if scores else None)
     run(results, out_dir, opts, blind=blind, reveal=reveal, echo=click.echo)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,7 +53,9 @@ def _mfcc(signal: np.ndarray, rate: int) -> np.ndarray:
     notice = _TruncationNotice()
     logging.getLogger().addFilter(notice)
     try:
-        return np.asarray(mfcc(signal, samplerate=rate, winlen=WINLEN, winstep=WINSTEP, numcep=NUMCEP))
+        with warnings.catch_warnings():   # python_speech_features calls the deprecated logging.warn
+            warnings.filterwarnings("ignore", "The 'warn' function is deprecated", DeprecationWarning)
+            return np.asarray(mfcc(signal, samplerate=rate, winlen=WINLEN, winstep=WINSTEP, numcep=NUMCEP))
     finally:
         logging.getLogger().removeFilter(notice)
 

@@ -79,7 +79,7 @@ def _listing() -> str:
                                       f"extra [{r.extra}]" if r.extra else "") if x)
         opts = ", ".join(f"{k}={v!r}" for k, v in r.params.items())
         lines.append(f"{r.name}\n    {dim} per frame, {rate}; needs {needs}\n    reproduces: {r.reproduces}"
-                     + (f"\n    options: {opts}" if opts else ""))
+                     f"\n    quirks: {r.quirks}" + (f"\n    options: {opts}" if opts else ""))
     return "\n".join(lines)
 
 

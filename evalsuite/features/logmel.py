@@ -6,7 +6,8 @@ What the original does, and what this recipe does:
 1. ``librosa.load(path)``: channels averaged (float), resampled to **22,050 Hz**. Here:
    :func:`scipy.signal.resample_poly` (Kaiser window, beta 5). librosa 0.7 resampled with resampy's
    ``kaiser_best`` (later versions: soxr), so values differ slightly, most near the band edges and in the
-   first and last few milliseconds.
+   first and last few milliseconds (against librosa 0.11 on a 44.1 kHz recording: log-mel within 1e-5 with
+   its ``res_type='polyphase'``, within 0.004 with its default soxr_hq).
 2. ``librosa.feature.melspectrogram(y, sr=22050, window=scipy.signal.hanning, hop_length=int(0.1 * 22050 / 2),
    fmin=100, fmax=7500, n_mels=64)`` with librosa's defaults otherwise: ``n_fft = 2048``, ``win_length =
    n_fft``, ``center=True`` with **reflect** padding of ``n_fft // 2`` (librosa 0.7; 0.10 pads with zeros),

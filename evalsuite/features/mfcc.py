@@ -21,6 +21,7 @@ its analysis window centred on each MFCC window's centre. 100 fps native; ``fps=
 from __future__ import annotations
 
 import logging
+import warnings
 
 import numpy as np
 
@@ -44,7 +45,9 @@ def psf_mfcc(signal: np.ndarray, rate: int, **kwargs) -> np.ndarray:
     notice = _TruncationNotice()
     logging.getLogger().addFilter(notice)
     try:
-        return np.asarray(mfcc(signal, samplerate=rate, **kwargs), dtype=np.float64)
+        with warnings.catch_warnings():   # python_speech_features calls the deprecated logging.warn
+            warnings.filterwarnings("ignore", "The 'warn' function is deprecated", DeprecationWarning)
+            return np.asarray(mfcc(signal, samplerate=rate, **kwargs), dtype=np.float64)
     finally:
         logging.getLogger().removeFilter(notice)
 

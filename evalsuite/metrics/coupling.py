@@ -35,7 +35,7 @@ LEXICAL_FEATURES = ("wrist_height", "hand_distance", "hand_chest", "hand_forward
 
 
 def speech_energy(signal: npt.ArrayLike, sr: float, fps: float, n_frames: int | None = None,
-                  smooth_s: float = 0.05) -> np.ndarray:
+                  smooth_s: float = 0.1) -> np.ndarray:
     """``(T,)`` RMS energy of a mono signal on the frame grid ``t = k / fps``.
 
     ``e[k] = sqrt(mean(x[n]^2))`` over the samples n with ``|n/sr - k/fps| < 1/(2 fps)`` (one frame centred
@@ -68,17 +68,20 @@ def joint_speed(positions: npt.ArrayLike, fps: float) -> np.ndarray:
 def _pearson(a: np.ndarray, b: np.ndarray) -> float:
     a, b = a - a.mean(), b - b.mean()
     den = float(np.sqrt((a * a).sum() * (b * b).sum()))
-    return float((a * b).sum() / den) if den > 0 else float("nan")
+    return float((a * b).sum() / den) if den > 1e-12 * max(1.0, float(len(a))) else 0.0
 
 
 def energy_speed_correlation(energy: npt.ArrayLike, speed: npt.ArrayLike, fps: float,
-                             max_lag_s: float = 0.3) -> tuple[float, float, np.ndarray]:
+                             max_lag_s: float = 0.3, smooth_s: float = 0.1) -> tuple[float, float, np.ndarray]:
     """Correlation of speech energy with motion speed over lags: ``(best r, its lag in s, r per lag)``.
 
+    The speed is first smoothed like the energy (:func:`speech_energy`): a Gaussian of standard deviation
+    ``smooth_s`` seconds (0: none), so that the envelope of the movement, not each syllable's flick, is
+    compared with the envelope of the speech.
     ``r(l) = pearson(e[t], s[t + l])`` over the frames where both exist, for lags ``l = -L..L`` frames,
     ``L = round(max_lag_s * fps)``; a positive lag means the motion follows the speech. Both series are
-    on the motion's frame grid and are truncated to the shorter one. The best lag maximises r (NaN r when
-    either series is constant over the overlap; then the best r is NaN and its lag NaN).
+    on the motion's frame grid and are truncated to the shorter one. The best lag maximises r. A constant
+    series (no motion, or silence) has no correlation: r = 0 at every lag, and the best lag is NaN.
     """
     e = np.asarray(energy, dtype=np.float64).ravel()
     s = np.asarray(speed, dtype=np.float64).ravel()
@@ -89,11 +92,13 @@ def energy_speed_correlation(energy: npt.ArrayLike, speed: npt.ArrayLike, fps: f
         raise InputError(f"need at least {2 * lag_max + 3} frames for lags of +-{max_lag_s:g} s, got {n}",
                          field="speed")
     e, s = e[:n], s[:n]
+    if smooth_s > 0:
+        s = gaussian_filter1d(s, smooth_s * fps, mode="nearest")
     lags = list(range(-lag_max, lag_max + 1))
     r = np.array([_pearson(e[max(0, -k): n - max(0, k)], s[max(0, k): n - max(0, -k)]) for k in lags])
-    if not np.isfinite(r).any():
-        return float("nan"), float("nan"), r
-    best = int(np.nanargmax(r))
+    if not np.any(r != 0):
+        return 0.0, float("nan"), r
+    best = int(np.argmax(r))
     return float(r[best]), float(lags[best] / fps), r
 
 

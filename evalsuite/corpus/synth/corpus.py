@@ -84,8 +84,9 @@ def _segment_audio(sentences: list[tuple[list[str], list[bool], list[int]]], ban
     flags: list[bool] = []
     texts: list[str] = []
     for k, (sent, emph, phrase_lens) in enumerate(sentences):
-        if k and pos / rate > layout.segment_s - 2.0:
-            break
+        spoken = sum(len(bank[(w, e)]) for w, e in zip(sent, emph)) / rate + 0.06 * len(sent) + 0.8
+        if k and pos / rate + spoken > layout.segment_s and pos / rate > 0.6 * layout.segment_s:
+            break           # the next sentence (with its pause) would not fit, and the segment is long enough
         if k:
             pause = _u(rng, layout.long_pause_s) if rng.random() < layout.long_pause_p else _u(rng, layout.sentence_pause_s)
             pieces.append(np.zeros(int(round(pause * rate)), dtype=np.int16))
@@ -107,18 +108,13 @@ def _segment_audio(sentences: list[tuple[list[str], list[bool], list[int]]], ban
     return audio, Transcript(tuple(words)), flags, texts, len(audio) / rate
 
 
-def _clip_onsets(bank: WordBank) -> dict[tuple[str, bool], list[float]]:
-    """Acoustic onsets (s after the word's start, 4 decimals) of every clip: spectral-flux peaks
-    (:func:`evalsuite.metrics.beats.audio_onsets`) of the clip between 0.3 s of silence."""
+def _word_onsets(audio: np.ndarray, rate: int, transcript: Transcript) -> list[list[float]]:
+    """Acoustic onsets in each word (s after its start, 4 decimals): the spectral-flux onsets of the segment's
+    speech (:func:`evalsuite.metrics.beats.audio_onsets`, what beat alignment measures) that fall in it."""
     from evalsuite.metrics.beats import audio_onsets
 
-    rate = int(bank.rate or 22050)
-    pad = np.zeros(int(0.3 * rate))
-    out = {}
-    for key, clip in sorted(bank.clips.items()):
-        on = audio_onsets(np.concatenate([pad, clip / 32768.0, pad]), rate) - 0.3
-        out[key] = [round(float(o), 4) for o in on if 0.0 <= o < len(clip) / rate]
-    return out
+    on = audio_onsets(audio / 32768.0, rate)
+    return [[round(float(o - w.start), 4) for o in on if w.start <= o < w.end] for w in transcript.words]
 
 
 def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0, *, layout: Layout | None = None,
@@ -134,7 +130,7 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
     root = pathlib.Path(out_dir)
     if root.exists() and any(root.iterdir()):
         raise InputError("the output folder exists and is not empty", path=root)
-    n_seg = max(3, int(round(minutes * 60.0 / layout.segment_s)))
+    n_seg = max(3, int(round(minutes * 60.0 / (layout.segment_s - 2.5))))   # segments average segment_s - 2.5 s
     splits = assign_splits(n_seg, np.random.default_rng([seed, 1]))
     text_rng = np.random.default_rng([seed, 0])
     used: set[str] = set()
@@ -142,7 +138,6 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
     pools = [_sentences(text_rng, per_seg, used, layout.emphasis_rate) for _ in range(n_seg)]
     bank = WordBank(voice, jobs)
     bank.add((w, e) for pool in pools for sent, emph, _ in pool for w, e in zip(sent, emph))
-    clip_onsets = _clip_onsets(bank)
     meta: dict[str, Any] = {
         "format": FORMAT, "format_version": FORMAT_VERSION, "seed": int(seed), "minutes": float(minutes),
         "speaker": speaker, "fps": params.fps, "sample_rate": bank.rate, "espeak_ng": espeak_version(),
@@ -158,7 +153,7 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
         rng = np.random.default_rng([seed, 2, idx])
         audio, transcript, flags, texts, duration = _segment_audio(pools[idx], bank, layout, rng)
         motion_seed = int(np.random.SeedSequence([seed, 3, idx]).generate_state(1)[0])
-        onsets = [clip_onsets[(w.text, f)] for w, f in zip(transcript.words, flags)]
+        onsets = _word_onsets(audio.astype(np.float64), int(bank.rate or 22050), transcript)
         motion, labels = oracle_motion(transcript, duration, motion_seed, flags, params, name=seg_id, onsets=onsets)
         paths = segment_paths(root, split, seg_id)
         for p in paths.values():

@@ -1,9 +1,9 @@
 """The synthetic speaker's language: a small grammar whose lexicon holds semantic keywords.
 
-Sentences are one or two phrases (joined by a comma pause); each phrase is drawn from a handful of
-templates whose slots are filled from word lists. Some slots are *keyword* slots that take a word of one
-of the keyword classes (:data:`KEYWORD_CLASSES`), each of which triggers a semantic gesture in the motion
-model. All randomness comes from the ``numpy.random.Generator`` passed in.
+Sentences are one or two phrases (joined by a comma pause and a linking word). A phrase holds a keyword
+with probability ``KEYWORD_P`` (its class drawn uniformly from :data:`KEYWORD_CLASSES`; each class triggers
+a semantic gesture in the motion model); its template is drawn from that class's templates and the other
+slots are filled from word lists (:data:`LEXICON`). All randomness comes from the ``numpy.random.Generator`` passed in.
 """
 from __future__ import annotations
 
@@ -36,22 +36,22 @@ LEXICON: dict[str, tuple[str, ...]] = {
     "link": ("and", "but", "so", "then", "because"),
 }
 
-# Phrase templates. Upper-case slots are filled from LEXICON; "K:class" is a keyword of that class;
-# "K" is a keyword of a random class.
-_TEMPLATES: tuple[tuple[str, ...], ...] = (
-    ("subj", "verb", "det", "adj", "noun", "adv"),
-    ("K:self", "verb", "det", "noun", "prep", "det", "noun"),
-    ("K:point", "verb", "det", "adj", "noun"),
-    ("det", "noun", "was", "K:up", "prep", "det", "noun"),
-    ("subj", "verb", "K:wide", "the", "noun", "adv"),
-    ("subj", "were", "K:negation", "near", "det", "adj", "noun"),
-    ("det", "adj", "noun", "verb", "K", "adv"),
-    ("K:negation", "subj", "verb", "det", "noun"),
-    ("subj", "verb", "det", "noun", "K:up", "there"),
-    ("the", "noun", "was", "K:wide", "and", "adj"),
-    ("subj", "verb", "K:self", "noun", "adv"),
-    ("det", "noun", "prep", "det", "adj", "noun"),
-)
+# Phrase templates by the keyword class they hold ("" = none). Lower-case slots are filled from LEXICON;
+# "K" is a keyword of the template's class; other words are literal.
+_TEMPLATES: dict[str, tuple[tuple[str, ...], ...]] = {
+    "up": (("det", "noun", "was", "K", "prep", "det", "noun"), ("subj", "verb", "det", "noun", "K", "again"),
+           ("det", "adj", "noun", "went", "K", "adv")),
+    "wide": (("subj", "verb", "K", "the", "noun", "adv"), ("the", "noun", "was", "K", "and", "adj"),
+             ("subj", "saw", "a", "K", "noun", "prep", "det", "noun")),
+    "self": (("K", "verb", "det", "noun", "prep", "det", "noun"), ("subj", "verb", "K", "noun", "adv"),
+             ("det", "adj", "noun", "was", "K", "adv")),
+    "point": (("K", "verb", "det", "adj", "noun"), ("subj", "verb", "det", "noun", "over", "K"),
+              ("det", "noun", "near", "K", "was", "adj")),
+    "negation": (("subj", "were", "K", "near", "det", "adj", "noun"), ("K", "subj", "verb", "det", "noun"),
+                 ("det", "noun", "was", "K", "adj", "adv")),
+    "": (("subj", "verb", "det", "adj", "noun", "adv"), ("det", "noun", "prep", "det", "adj", "noun")),
+}
+KEYWORD_P = 0.6   # a phrase holds a keyword (of a uniformly drawn class) with this probability
 
 
 def keyword_class(word: str) -> str | None:
@@ -72,19 +72,14 @@ class Sentence(tuple[tuple[str, ...], ...]):
 
 
 def _phrase(rng: np.random.Generator) -> tuple[str, ...]:
-    template = _TEMPLATES[int(rng.integers(len(_TEMPLATES)))]
     classes = sorted(KEYWORD_CLASSES)
+    cls = classes[int(rng.integers(len(classes)))] if rng.random() < KEYWORD_P else ""
+    options = _TEMPLATES[cls]
+    template = options[int(rng.integers(len(options)))]
     out: list[str] = []
     for slot in template:
-        if slot.startswith("K"):
-            cls = slot[2:] if ":" in slot else classes[int(rng.integers(len(classes)))]
-            words = KEYWORD_CLASSES[cls]
-        elif slot in LEXICON:
-            words = LEXICON[slot]
-        else:
-            out.append(slot)
-            continue
-        out.append(words[int(rng.integers(len(words)))])
+        words = KEYWORD_CLASSES[cls] if slot == "K" else LEXICON.get(slot)
+        out.append(slot if words is None else words[int(rng.integers(len(words)))])
     return tuple(out)
 
 

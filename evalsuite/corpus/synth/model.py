@@ -4,17 +4,19 @@ Given words with times and emphasis flags, a seed and :class:`MotionParams`, :fu
 
 1. **plans gesture units** (:func:`plan_gestures`): a keyword of a class (grammar.KEYWORD_CLASSES) gets its
    semantic gesture with probability ``semantic_p``, an emphasised ordinary word a beat with probability
-   ``beat_p``. The stroke of a unit ends ``lag`` after the word's onset; before it come the stroke
-   (``stroke_s``) and the preparation (``prep_s``); after it a hold (beats: ``beat_hold_s``; semantic: until
-   ``semantic_hold_s`` after the keyword's end) and, when the arm is free long enough, a retraction
-   (``retract_s``) to rest. Units are sequential: a unit whose stroke would start before the previous
-   unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head shake and
-   uses no arm.
+   ``beat_p``. A beat's stroke (``beat_stroke_s``) ends ``lag`` after the word's onset, a semantic stroke
+   (``semantic_stroke_s``; a head shake: ``shake_cycles`` at ``shake_hz``) starts ``lag`` after it; before
+   the stroke comes the preparation (``prep_s``); after it a hold (beats: ``beat_hold_s``; semantic: until
+   ``semantic_hold_s`` after the keyword's end) and a retraction (``retract_s``) to rest of each arm whose
+   next unit leaves it free for ``retract_s + rest_gap_s`` (otherwise the arm holds until its next
+   preparation). Arm units are sequential: a unit whose stroke would start less than ``min_prep_s`` after
+   the previous unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head
+   shake: it uses no arm and never conflicts.
 2. **renders** the units as keyframe tracks of arm poses (body.POSES) with minimum-jerk transitions, adds
-   *batons* (while a word is spoken the hands circle at ``baton_hz`` with a radius of ``baton_deg`` x gain
-   x ``sin(pi s)^(1/2)`` over each syllable, lagged ``baton_lag_s``: wrist speed follows speech and stops at
-   syllable onsets), nods on emphasised words, head shakes, breathing and sway, and labels each frame with
-   the phase, gesture kind and keyword of the unit it belongs to.
+   *batons* (on each syllable the forearms flick up or down, alternately, to ``+-baton_deg/2`` x gain x
+   min(1.5, syllable duration / 0.2 s), with a minimum-jerk profile, lagged ``baton_lag_s``: wrist speed
+   follows speech and stops at syllable onsets), nods on emphasised words, head shakes, breathing and sway,
+   and labels each frame with the phase, gesture kind and keyword of the unit it belongs to.
 
 Every random number is drawn in a fixed order whatever the switches, so the switches change only what
 they name: the same seed with ``offset_s=0.6`` is the same performance 0.6 s late.
@@ -54,6 +56,7 @@ class Unit:
     amplitude: float
     end: float = 0.0          # end of the retraction (or of the hold, when the next unit follows on)
     retracts: bool = True
+    retract_arms: str = ""    # the arms that return to rest after the hold
 
 
 @dataclass
@@ -96,35 +99,40 @@ def plan_gestures(transcript: Transcript, emphasis: list[bool], params: MotionPa
         hands = "R" if u[6] < p.hands_p[0] else ("L" if u[6] < p.hands_p[0] + p.hands_p[1] else "RL")
         arms = {"wide": "RL", "negation": ""}.get(kind, hands)
         onset = w.start + p.offset_s
-        stroke_end = onset + lag
-        if kind == "negation":  # a head shake over the word: no arm
-            stroke_end = onset + lag + p.shake_cycles / p.shake_hz
-            stroke = p.shake_cycles / p.shake_hz
+        stroke_end = onset + lag            # a beat's stroke ends on the emphasised syllable
+        if kind != "beat":                  # a semantic stroke starts with its keyword (a shake: no arm)
+            stroke = p.shake_cycles / p.shake_hz if kind == "negation" else stroke
+            stroke_end = onset + lag + stroke
         hold = _uniform(u[4], p.beat_hold_s) if kind == "beat" else (
             w.end + p.offset_s + _uniform(u[4], p.semantic_hold_s) - stroke_end)
         units.append(Unit(kind, w.text, i, arms, stroke_end - stroke - _uniform(u[3], p.prep_s),
                           stroke_end - stroke, stroke_end, stroke_end + max(hold, 0.05),
                           _uniform(u[5], p.retract_s), _uniform(u[7], p.gesture_amplitude) * p.amplitude))
     kept: list[Unit] = []
-    for unit in units:
-        while kept and unit.stroke_start < kept[-1].hold_end + 0.02:
+    shakes = [u for u in units if u.kind == "negation"]      # the head is free: shakes never conflict
+    for unit in (u for u in units if u.kind != "negation"):
+        while kept and unit.stroke_start < kept[-1].hold_end + p.min_prep_s:
             if unit.kind != "beat" and kept[-1].kind == "beat":
                 kept.pop()          # a semantic gesture wins over a beat
                 continue
             break
-        if kept and unit.stroke_start < kept[-1].hold_end + 0.02:
+        if kept and unit.stroke_start < kept[-1].hold_end + p.min_prep_s:
             continue
         if kept:
             unit.prep_start = max(unit.prep_start, kept[-1].hold_end)
         kept.append(unit)
+    for unit in shakes:
+        unit.end = unit.hold_end
     for k, unit in enumerate(kept):
+        # an arm retracts when its next unit leaves it free long enough; otherwise it holds until then
+        for arm in unit.arms:
+            nxt_arm = next((v for v in kept[k + 1:] if arm in v.arms), None)
+            if nxt_arm is None or nxt_arm.prep_start - unit.hold_end >= unit.retract_s + p.rest_gap_s:
+                unit.retract_arms += arm
+        unit.retracts = bool(unit.retract_arms)
         nxt = kept[k + 1] if k + 1 < len(kept) else None
-        free = (nxt.prep_start - unit.hold_end) if nxt is not None else np.inf
-        unit.retracts = free >= unit.retract_s + p.rest_gap_s or nxt is None or not set(unit.arms) <= set(nxt.arms)
         unit.end = unit.hold_end + unit.retract_s if unit.retracts else (nxt.prep_start if nxt else unit.hold_end)
-        if nxt is not None and unit.retracts:
-            unit.end = min(unit.end, nxt.prep_start)
-    return kept
+    return sorted(kept + shakes, key=lambda u: u.stroke_start)
 
 
 def _arm_tracks(units: list[Unit], params: MotionParams) -> dict[str, Track]:
@@ -145,8 +153,8 @@ def _arm_tracks(units: list[Unit], params: MotionParams) -> dict[str, Track]:
             tr.key(unit.stroke_start, ready)
             tr.key(unit.stroke_end, target)
             tr.key(unit.hold_end, target)
-            if unit.retracts:
-                tr.key(unit.end, rest)
+            if side[0] in unit.retract_arms:
+                tr.key(unit.hold_end + unit.retract_s, rest)
     return tracks
 
 
@@ -155,13 +163,13 @@ def _labels(units: list[Unit], t: np.ndarray) -> FrameLabels:
     phase = np.full(n, "rest", dtype=object)
     kind = np.full(n, "none", dtype=object)
     keyword = np.full(n, "", dtype=object)
-    for unit in units:
+    for unit in sorted(units, key=lambda u: u.kind == "negation"):     # arm gestures first, then head shakes
         stops = ((unit.prep_start, "preparation"), (unit.stroke_start, "stroke"), (unit.stroke_end, "hold"),
                  (unit.hold_end, "retraction" if unit.retracts else "hold"), (unit.end, None))
         for (a, name), (b, _) in zip(stops[:-1], stops[1:]):
             sel = (t >= a) & (t < b)
-            if unit.kind == "negation":  # the head shake labels only frames the arms leave at rest
-                sel &= kind == "none"
+            if unit.kind == "negation":  # a head shake labels the frames where the arms rest or hold
+                sel &= (phase == "rest") | (phase == "hold")
             phase[sel], kind[sel], keyword[sel] = name, unit.kind, unit.keyword
     return FrameLabels(phase.astype(str), kind.astype(str), keyword.astype(str))
 
@@ -212,26 +220,29 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
         vals = tr.sample(t)
         for c, (joint, ch) in enumerate(ARM_CHANNELS):
             values[:, channel_index(sk, side + joint, ch)] = vals[:, c]
-    # batons: while a word is spoken the hands circle (elbow flexion and arm abduction in quadrature at
-    # baton_hz) with an amplitude that rises and falls over the word, so wrist speed follows the speech;
+    # batons: on every syllable the forearms flick (elbow flexion, minimum-jerk, alternately up by
+    # baton_deg x gain and back), so wrist speed follows the speech and stops at syllable onsets;
     # nods on emphasised words
-    gate = np.zeros(n)
+    baton = Track(np.zeros(1))
     nod = np.zeros(n)
+    up = False
     if p.beats:
         for i, (w, emph) in enumerate(zip(transcript.words, flags)):
             gain = (p.emphasis_gain if emph else 1.0) * (0.7 + 0.6 * draws[i, 8])
             start = w.start + p.offset_s + p.baton_lag_s
-            cuts = [0.0] + [o for o in syl[i] if p.min_syllable_s <= o <= w.duration - p.min_syllable_s]
+            cuts = [0.0] + [float(o) for o in syl[i] if p.min_syllable_s <= o <= w.duration - p.min_syllable_s]
             cuts.append(w.duration)
+            baton.hold(start)
             for a, b in zip(cuts[:-1], cuts[1:]):
-                gate += gain * np.sqrt(_bump(t, start + a, b - a))
+                up = not up
+                size = p.baton_deg * gain * min(1.5, (b - a) / 0.2)   # about the same speed on every syllable
+                baton.key(start + b, np.array([size / 2 if up else -size / 2]))
             if emph:
                 nod += p.nod_deg * _bump(t, start, 0.35)
-    gate *= p.baton_deg * p.amplitude
-    phase = 2 * np.pi * p.baton_hz * t
-    for side, sign, shift in (("Right", 1.0, 0.0), ("Left", -1.0, 0.6 * np.pi)):
-        values[:, channel_index(sk, side + "ForeArm", "Yrotation")] += sign * gate * np.sin(phase + shift)
-        values[:, channel_index(sk, side + "Arm", "Zrotation")] += 0.5 * sign * gate * np.cos(phase + shift)
+    flick = baton.sample(t)[:, 0] * p.amplitude
+    values[:, channel_index(sk, "RightForeArm", "Yrotation")] += flick
+    values[:, channel_index(sk, "LeftForeArm", "Yrotation")] -= 0.7 * flick
+    values[:, channel_index(sk, "RightHand", "Zrotation")] += flick
     values[:, channel_index(sk, "Neck", "Xrotation")] += p.amplitude * nod
     for unit in units:
         if unit.kind == "negation":

@@ -50,9 +50,10 @@ def segment_oracle(corpus: Corpus | str | pathlib.Path, segment_id: str, seed: i
     p = params or MotionParams.from_dict(meta["model"]["params"])
     transcript = seg.transcript
     assert transcript is not None
-    emphasised = set(seg.meta.get("emphasis") or meta["segments"][segment_id]["emphasis"])
+    info = meta["segments"][segment_id]       # corpus.json is the source, whichever reader made the Corpus
+    emphasised = set(info["emphasis"])
     flags = [i in emphasised for i in range(len(transcript))]
-    s = int(seg.meta.get("motion_seed", meta["segments"][segment_id]["motion_seed"])) if seed is None else int(seed)
-    duration = float(meta["segments"][segment_id]["n_frames"]) / p.fps
-    onsets = meta["segments"][segment_id].get("onsets")
+    s = int(info["motion_seed"]) if seed is None else int(seed)
+    duration = float(info["n_frames"]) / p.fps
+    onsets = info.get("onsets")
     return oracle_motion(transcript, duration, s, flags, p, name=segment_id, onsets=onsets)

@@ -1,0 +1,289 @@
+"""Objective metrics against human judgements across conditions: ``evalsuite correlate``.
+
+For every metric (a ``condition, metric, value`` table, e.g. ``summary.csv`` of ``evalsuite score``)
+and every human measure (a ``condition, value`` per question and measure: MUSHRA medians or means,
+Likert means, Elo, pairwise win rates; see :mod:`evalsuite.analysis.correlate_io`), over the
+conditions both have:
+
+- Spearman's rho and Kendall's tau-b with their p-values, exactly ``scipy.stats.spearmanr(x, y)`` and
+  ``scipy.stats.kendalltau(x, y, variant="b")`` (tau-b corrects for ties; scipy's default method:
+  exact null distribution for small samples without ties, normal approximation otherwise);
+- percentile bootstrap CIs from ``n_boot`` resamples of the **conditions** with replacement (seeded;
+  resamples in which either side is constant have no correlation and are left out, the row says how
+  many);
+- optionally percentile CIs from resamples of the **participants** (``participants=``, a
+  :class:`~evalsuite.analysis.correlate_boot.ParticipantResampler` built from the study's results):
+  the human measure is recomputed on each resample, the metric values stay fixed;
+- the metric's direction (``better``: from the metric registry, else the scores' own ``better``
+  column) and ``agrees``: whether the sign of rho is the one a valid metric would give (human measures
+  are higher-is-better: a lower-is-better metric should correlate negatively). Empty for
+  "closer to natural" metrics, whose sign says nothing by itself, and for unknown metrics.
+
+Undefined correlations (fewer than 3 conditions with a value, a constant metric or human measure) give
+a row with empty numbers and a ``note``, never an exception.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from evalsuite.errors import InputError
+
+__all__ = ["COLUMNS", "correlate", "rank_correlations", "spearman_rows", "kendall_b_rows", "metric_direction",
+           "add_distance_to_natural"]
+
+COLUMNS = ["metric", "human_measure", "n", "spearman_rho", "spearman_p", "spearman_ci_low", "spearman_ci_high",
+           "kendall_tau_b", "kendall_p", "kendall_ci_low", "kendall_ci_high", "question", "measure", "better",
+           "agrees", "spearman_ci_low_participants", "spearman_ci_high_participants",
+           "kendall_ci_low_participants", "kendall_ci_high_participants", "conditions", "note"]
+MIN_CONDITIONS = 3
+_CHUNK = 256
+
+
+def rank_correlations(x, y) -> tuple[float, float, float, float]:
+    """``(rho, p_rho, tau_b, p_tau)``: ``scipy.stats.spearmanr`` and ``kendalltau(variant="b")`` of two
+    equally long vectors; all NaN when either is constant (no rank correlation exists)."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if x.size < 2 or np.all(x == x[0]) or np.all(y == y[0]):
+        return (math.nan,) * 4
+    s = stats.spearmanr(x, y)
+    k = stats.kendalltau(x, y, variant="b")
+    return float(s.statistic), float(s.pvalue), float(k.statistic), float(k.pvalue)
+
+
+def spearman_rows(X, Y) -> np.ndarray:
+    """Spearman's rho of each row pair of ``X``, ``Y`` (``(B, n)``; average ranks for ties, as scipy):
+    the Pearson correlation of the ranks. NaN for a constant row."""
+    rx = stats.rankdata(X, axis=1)
+    ry = stats.rankdata(Y, axis=1)
+    rx -= rx.mean(axis=1, keepdims=True)
+    ry -= ry.mean(axis=1, keepdims=True)
+    den = np.sqrt((rx * rx).sum(axis=1) * (ry * ry).sum(axis=1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = np.where(den > 0, (rx * ry).sum(axis=1) / den, np.nan)
+    return np.clip(r, -1.0, 1.0)
+
+
+def kendall_b_rows(X, Y) -> np.ndarray:
+    """Kendall's tau-b of each row pair: ``(n_c - n_d) / sqrt((n0 - n_x) (n0 - n_y))`` over all pairs
+    ``i < j``, with ``n_x``, ``n_y`` the pairs tied in X, in Y. NaN for a constant row."""
+    X, Y = np.asarray(X, dtype=float), np.asarray(Y, dtype=float)
+    i, j = np.triu_indices(X.shape[1], 1)
+    sx = np.sign(X[:, i] - X[:, j])
+    sy = np.sign(Y[:, i] - Y[:, j])
+    den = np.sqrt((sx != 0).sum(axis=1).astype(float) * (sy != 0).sum(axis=1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(den > 0, (sx * sy).sum(axis=1) / den, np.nan)
+    return np.clip(t, -1.0, 1.0)
+
+
+def _replicates(X, Y) -> tuple[np.ndarray, np.ndarray]:
+    rho, tau = [], []
+    for s in range(0, X.shape[0], _CHUNK):
+        rho.append(spearman_rows(X[s:s + _CHUNK], Y[s:s + _CHUNK]))
+        tau.append(kendall_b_rows(X[s:s + _CHUNK], Y[s:s + _CHUNK]))
+    return np.concatenate(rho), np.concatenate(tau)
+
+
+def _percentile(values, alpha: float) -> tuple[float, float]:
+    v = values[np.isfinite(values)]
+    if v.size == 0:
+        return (math.nan, math.nan)
+    lo, hi = np.percentile(v, [100 * alpha / 2, 100 * (1 - alpha / 2)])
+    return float(lo), float(hi)
+
+
+def condition_bootstrap(x, y, n_boot: int, seed: int, alpha: float = 0.05):
+    """Percentile CIs of rho and tau-b from ``n_boot`` resamples of the conditions (pairs ``(x_i, y_i)``
+    drawn with replacement, ``numpy.random.default_rng(seed)``). Returns
+    ``(rho_lo, rho_hi, tau_lo, tau_hi, n_undefined)``."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    idx = np.random.default_rng(seed).integers(0, x.size, size=(n_boot, x.size))
+    rho, tau = _replicates(x[idx], y[idx])
+    return (*_percentile(rho, alpha), *_percentile(tau, alpha), int((~np.isfinite(rho)).sum()))
+
+
+def _registry_directions() -> dict[str, str]:
+    from evalsuite.metrics.families import metric_index
+
+    return {name: info.better for name, (_, info) in metric_index().items()}
+
+
+def metric_direction(metric: str, registry: dict[str, str] | None = None, fallback: str = "") -> str:
+    """``lower``/``higher``/``closer to natural`` for a metric name (``hellinger_speed[wrists]`` is
+    ``hellinger_speed`` on a joint group): the registry's, else ``fallback`` (e.g. the summary's own
+    ``better`` column), else ``""`` (unknown)."""
+    reg = _registry_directions() if registry is None else registry
+    base = metric.split("[", 1)[0].strip()
+    return reg.get(metric, reg.get(base, fallback if fallback in ("lower", "higher", "closer to natural") else ""))
+
+
+def _agrees(rho: float, better: str, human_higher: bool):
+    if not math.isfinite(rho) or better not in ("lower", "higher"):
+        return None
+    expected = (1 if better == "higher" else -1) * (1 if human_higher else -1)
+    return bool(rho * expected > 0)
+
+
+def _snap(row: dict, est: str, lo: str, hi: str, tol: float = 1e-12) -> None:
+    """Bounds that differ from scipy's estimate by floating-point rounding only (e.g. 1.0 vs
+    0.9999999999999999 for a perfect correlation) are moved onto it."""
+    for key, pick in ((lo, min), (hi, max)):
+        if math.isfinite(row[key]) and abs(row[key] - row[est]) < tol:
+            row[key] = pick(row[key], row[est])
+
+
+def _label(path) -> str:
+    return f" ({path})" if path else ""
+
+
+def check_conditions(score_conds, human_conds, scores_path=None, human_path=None) -> None:
+    """InputError naming the conditions present in one input and not the other."""
+    only_s = sorted(set(score_conds) - set(human_conds))
+    only_h = sorted(set(human_conds) - set(score_conds))
+    if only_s or only_h:
+        parts = []
+        if only_s:
+            parts.append(f"in the scores{_label(scores_path)} but not the human judgements: {', '.join(only_s)}")
+        if only_h:
+            parts.append(f"in the human judgements{_label(human_path)} but not the scores: {', '.join(only_h)}")
+        raise InputError("conditions differ between the inputs: " + "; ".join(parts)
+                         + " (rename with --rename SCORE=HUMAN, leave out with --exclude NAME, or correlate "
+                           "the shared ones with --shared-only)")
+
+
+def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, seed: int = 42,
+              alpha: float = 0.05, participants=None, shared_only: bool = False, human_higher: bool = True,
+              notes: list | None = None, natural: str | None = None) -> pd.DataFrame:
+    """The ``correlations.csv`` table: one row per metric and human measure (module docstring).
+
+    ``scores``: columns ``condition, metric, value`` (optional ``better``); ``human``: columns
+    ``condition, value`` and optional ``question``, ``measure`` (as read by
+    :func:`~evalsuite.analysis.correlate_io.read_human`). Conditions must be the same in both (an
+    :class:`InputError` names those that are not) unless ``shared_only``; at least 3 must be shared.
+    ``participants``: optional resampler for participant-bootstrap CIs. Notes about the inputs (left-out
+    conditions) are appended to ``notes`` when given. ``natural``: see :func:`add_distance_to_natural`.
+    """
+    scores, human = _normalise(scores, "scores"), _normalise(human, "human")
+    if natural:
+        scores = add_distance_to_natural(scores, natural)
+    s_path, h_path = scores.attrs.get("path"), human.attrs.get("path")
+    s_conds, h_conds = set(scores["condition"]), set(human["condition"])
+    shared = sorted(s_conds & h_conds)
+    if not shared_only:
+        check_conditions(s_conds, h_conds, s_path, h_path)
+    elif notes is not None and s_conds != h_conds:
+        for what, conds in (("scores", s_conds - h_conds), ("human judgements", h_conds - s_conds)):
+            if conds:
+                notes.append(f"only in the {what}, left out: {', '.join(sorted(conds))}")
+    if len(shared) < MIN_CONDITIONS:
+        raise InputError(f"{len(shared)} condition(s) shared by the scores{_label(s_path)} and the human "
+                         f"judgements{_label(h_path)} ({', '.join(shared) or 'none'}): a rank correlation needs "
+                         f"at least {MIN_CONDITIONS}")
+    registry = _registry_directions()
+    rows = []
+    hum_groups = list(human.groupby(["question", "measure"], sort=False))
+    for metric, sg in scores.groupby("metric", sort=False):
+        svals = dict(zip(sg["condition"], sg["value"]))
+        fallback = str(sg["better"].iloc[0]) if "better" in sg.columns else ""
+        better = metric_direction(str(metric), registry, fallback)
+        for (question, measure), hg in hum_groups:
+            hvals = dict(zip(hg["condition"], hg["value"]))
+            rows.append(_row(str(metric), str(question), str(measure), svals, hvals, shared, better,
+                             n_boot=n_boot, seed=seed, alpha=alpha, participants=participants,
+                             human_higher=human_higher, source=human.attrs.get("source", "")))
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def add_distance_to_natural(scores: pd.DataFrame, natural: str) -> pd.DataFrame:
+    """``scores`` plus, for every "closer to natural" metric ``m``, a metric ``|m - natural|`` (the
+    absolute difference from the natural condition's value; lower is better), so such metrics get an
+    expected sign too. ``natural``: the natural condition's name in ``scores``."""
+    scores = _normalise(scores, "scores")
+    if natural not in set(scores["condition"]):
+        raise InputError(f"--natural {natural!r}: no such condition in the scores; they have "
+                         f"{', '.join(sorted(set(scores['condition'])))}", path=scores.attrs.get("path"))
+    registry = _registry_directions()
+    extra = []
+    for metric, sg in scores.groupby("metric", sort=False):
+        fallback = str(sg["better"].iloc[0]) if "better" in sg.columns else ""
+        nat = sg.loc[sg["condition"] == natural, "value"]
+        if metric_direction(str(metric), registry, fallback) != "closer to natural" or nat.empty:
+            continue
+        extra.append(sg.assign(metric=f"|{metric} - {natural}|", value=(sg["value"] - float(nat.iloc[0])).abs(),
+                               better="lower"))
+    out = pd.concat([scores, *extra], ignore_index=True)
+    out.attrs.update(scores.attrs)
+    return out
+
+
+def _normalise(df: pd.DataFrame, what: str) -> pd.DataFrame:
+    need = ["condition", "metric", "value"] if what == "scores" else ["condition", "value"]
+    missing = [c for c in need if c not in df.columns]
+    if missing:
+        raise InputError(f"missing column(s) {', '.join(missing)} in the {what} table", path=df.attrs.get("path"))
+    out = df.copy()
+    out.attrs.update(df.attrs)
+    out["condition"] = out["condition"].astype(str)
+    out["value"] = pd.to_numeric(out["value"], errors="coerce").astype(float)
+    if what == "human":
+        for col in ("question", "measure"):
+            if col not in out.columns:
+                out[col] = "" if col == "question" else "value"
+            out[col] = out[col].fillna("").astype(str)
+    return out
+
+
+def human_label(question: str, measure: str) -> str:
+    return f"{measure} ({question})" if question else measure
+
+
+def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, seed, alpha, participants,
+         human_higher, source):
+    usable = [c for c in shared if c in svals and c in hvals
+              and math.isfinite(svals[c]) and math.isfinite(hvals[c])]
+    x = np.array([svals[c] for c in usable], dtype=float)
+    y = np.array([hvals[c] for c in usable], dtype=float)
+    row = {c: math.nan for c in COLUMNS}
+    row.update(metric=metric, human_measure=human_label(question, measure), question=question, measure=measure,
+               n=len(usable), better=better, agrees=None, conditions=";".join(usable), note="")
+    notes = []
+    if len(usable) < len(shared):
+        notes.append(f"no value for {', '.join(c for c in shared if c not in usable)}")
+    if len(usable) < MIN_CONDITIONS:
+        notes.append(f"{len(usable)} condition(s) with values: a rank correlation needs {MIN_CONDITIONS}")
+    elif np.all(x == x[0]):
+        notes.append("metric constant across conditions: rho and tau undefined")
+    elif np.all(y == y[0]):
+        notes.append("human measure constant across conditions: rho and tau undefined")
+    else:
+        rho, p_rho, tau, p_tau = rank_correlations(x, y)
+        row.update(spearman_rho=rho, spearman_p=p_rho, kendall_tau_b=tau, kendall_p=p_tau,
+                   agrees=_agrees(rho, better, human_higher))
+        if n_boot > 0:
+            lo, hi, tlo, thi, bad = condition_bootstrap(x, y, n_boot, seed, alpha)
+            row.update(spearman_ci_low=lo, spearman_ci_high=hi, kendall_ci_low=tlo, kendall_ci_high=thi)
+            _snap(row, "spearman_rho", "spearman_ci_low", "spearman_ci_high")
+            _snap(row, "kendall_tau_b", "kendall_ci_low", "kendall_ci_high")
+            if bad:
+                notes.append(f"{bad} of {n_boot} condition resamples constant (no correlation), left out")
+        if participants is not None and n_boot > 0:
+            H = participants.replicates(source, question, measure, usable, n_boot, seed)
+            if H is None:
+                notes.append(f"no participant bootstrap for {measure!r}")
+            else:
+                rr, tt = _replicates(np.broadcast_to(x, H.shape), H)
+                (row["spearman_ci_low_participants"], row["spearman_ci_high_participants"]) = _percentile(rr, alpha)
+                (row["kendall_ci_low_participants"], row["kendall_ci_high_participants"]) = _percentile(tt, alpha)
+                _snap(row, "spearman_rho", "spearman_ci_low_participants", "spearman_ci_high_participants")
+                _snap(row, "kendall_tau_b", "kendall_ci_low_participants", "kendall_ci_high_participants")
+                bad = int((~np.isfinite(rr)).sum())
+                if bad:
+                    notes.append(f"{bad} of {n_boot} participant resamples without a correlation, left out")
+    if better == "closer to natural" and math.isfinite(row["spearman_rho"]):
+        notes.append("closer to natural is better: no expected sign")
+    row["note"] = "; ".join(notes)
+    return row

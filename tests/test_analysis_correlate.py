@@ -1,0 +1,373 @@
+"""`evalsuite correlate`: metrics against human judgements, checked against scipy and by hand."""
+import itertools
+import math
+import re
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+from scipy import stats
+
+from evalsuite.analysis.correlate import COLUMNS, correlate, kendall_b_rows, rank_correlations, spearman_rows
+from evalsuite.analysis.correlate_boot import ParticipantResampler
+from evalsuite.analysis.correlate_io import read_human, read_scores
+from evalsuite.analysis.demo import sample_results_path
+from evalsuite.cli import main
+from evalsuite.errors import InputError
+
+SAMPLE = sample_results_path()
+STUDY = ["BL", "Jitter", "NA", "SysA", "SysB"]   # the conditions of the bundled simulated study
+
+
+def scores_frame(values, metric="ape", conds=None):
+    conds = conds or [f"c{i}" for i in range(len(values))]
+    return pd.DataFrame({"condition": conds, "metric": metric, "value": values})
+
+
+def human_frame(values, conds=None, measure="median", question="q"):
+    conds = conds or [f"c{i}" for i in range(len(values))]
+    return pd.DataFrame({"condition": conds, "value": values, "measure": measure, "question": question})
+
+
+def tau_by_hand(x, y):
+    """(tau_a, tau_b) from the pair counts: tau_b = (nc - nd) / sqrt((n0 - n1)(n0 - n2))."""
+    nc = nd = tx = ty = 0
+    for i, j in itertools.combinations(range(len(x)), 2):
+        s = np.sign(x[i] - x[j]) * np.sign(y[i] - y[j])
+        nc += s > 0
+        nd += s < 0
+        tx += x[i] == x[j]
+        ty += y[i] == y[j]
+    n0 = len(x) * (len(x) - 1) / 2
+    return (nc - nd) / n0, (nc - nd) / math.sqrt((n0 - tx) * (n0 - ty))
+
+
+# --- point estimates and p-values ----------------------------------------------------------------
+
+TIED_X = [1.0, 2.0, 2.0, 3.0, 4.0, 4.0, 5.0, 6.0]
+TIED_Y = [10.0, 20.0, 20.0, 20.0, 40.0, 30.0, 40.0, 50.0]
+
+
+def test_point_estimates_and_p_values_are_scipys_with_ties():
+    t = correlate(scores_frame(TIED_X), human_frame(TIED_Y), n_boot=0)
+    assert len(t) == 1 and list(t.columns) == COLUMNS
+    r = t.iloc[0]
+    s = stats.spearmanr(TIED_X, TIED_Y)
+    k = stats.kendalltau(TIED_X, TIED_Y, variant="b")
+    assert r.n == 8
+    assert r.spearman_rho == s.statistic and r.spearman_p == s.pvalue
+    assert r.kendall_tau_b == k.statistic and r.kendall_p == k.pvalue
+    # tau-b, not tau-a: with ties they differ, and the table has tau-b
+    tau_a, tau_b = tau_by_hand(TIED_X, TIED_Y)
+    assert abs(tau_a - tau_b) > 0.05
+    assert r.kendall_tau_b == pytest.approx(tau_b, abs=1e-12)
+    assert r.kendall_tau_b != pytest.approx(tau_a, abs=1e-3)
+    # Spearman = Pearson of average ranks
+    assert r.spearman_rho == pytest.approx(np.corrcoef(stats.rankdata(TIED_X), stats.rankdata(TIED_Y))[0, 1])
+
+
+def test_rank_correlations_without_ties_use_scipys_exact_kendall_p():
+    x, y = [3.0, 1.0, 4.0, 1.5, 5.0, 9.0, 2.0], [2.0, 1.0, 3.0, 5.0, 4.0, 7.0, 6.0]
+    rho, p_rho, tau, p_tau = rank_correlations(x, y)
+    assert (rho, p_rho) == tuple(stats.spearmanr(x, y))
+    assert (tau, p_tau) == tuple(stats.kendalltau(x, y, variant="b", method="exact"))
+
+
+def test_vectorised_replicates_equal_scipy_row_by_row():
+    rng = np.random.default_rng(0)
+    X = rng.integers(0, 4, size=(300, 7)).astype(float)
+    Y = rng.integers(0, 3, size=(300, 7)).astype(float)
+    rho, tau = spearman_rows(X, Y), kendall_b_rows(X, Y)
+    for i in range(300):
+        if np.ptp(X[i]) == 0 or np.ptp(Y[i]) == 0:
+            assert np.isnan(rho[i]) and np.isnan(tau[i])
+            continue
+        assert rho[i] == pytest.approx(stats.spearmanr(X[i], Y[i]).statistic, abs=1e-12)
+        assert tau[i] == pytest.approx(stats.kendalltau(X[i], Y[i]).statistic, abs=1e-12)
+
+
+def test_direction_and_agrees():
+    x = [1.0, 2.0, 3.0, 4.0]
+    down = [40.0, 30.0, 20.0, 10.0]
+    frame = pd.concat([scores_frame(x, "ape"), scores_frame(x, "speed"), scores_frame(x, "cca"),
+                       scores_frame(x, "hellinger_speed[wrists]"),
+                       scores_frame(x, "mystery").assign(better="higher"), scores_frame(x, "unknown")])
+    t = correlate(frame, human_frame(down), n_boot=0).set_index("metric")
+    assert t.loc["ape", "better"] == "lower" and t.loc["ape", "agrees"] is True           # lower & rho < 0
+    assert t.loc["cca", "better"] == "higher" and t.loc["cca", "agrees"] is False         # higher & rho < 0
+    assert t.loc["hellinger_speed[wrists]", "better"] == "lower"                          # a joint group
+    assert t.loc["speed", "better"] == "closer to natural" and t.loc["speed", "agrees"] is None
+    assert "no expected sign" in t.loc["speed", "note"]
+    assert t.loc["mystery", "better"] == "higher" and t.loc["mystery", "agrees"] is False  # summary's column
+    assert t.loc["unknown", "better"] == "" and t.loc["unknown", "agrees"] is None
+    flipped = correlate(frame, human_frame(down), n_boot=0, human_higher=False).set_index("metric")
+    assert flipped.loc["ape", "agrees"] is False
+
+
+def test_distance_to_natural_gives_closer_to_natural_metrics_a_sign():
+    conds = ["NA", "A", "B", "C"]
+    speed = scores_frame([10.0, 12.0, 4.0, 30.0], "speed", conds)      # |speed - NA| = 0, 2, 6, 20
+    human = human_frame([90.0, 70.0, 50.0, 20.0], conds)
+    t = correlate(speed, human, n_boot=0, natural="NA").set_index("metric")
+    d = t.loc["|speed - NA|"]
+    assert d.better == "lower" and d.spearman_rho == pytest.approx(-1.0) and d.agrees is True
+    assert t.loc["speed", "agrees"] is None
+    with pytest.raises(InputError, match="--natural 'natural': no such condition in the scores"):
+        correlate(speed, human, natural="natural")
+
+
+# --- bootstrap -------------------------------------------------------------------------------------
+
+def test_condition_bootstrap_is_seeded_and_contains_the_estimate():
+    rng = np.random.default_rng(1)
+    x = np.arange(10.0)
+    y = x + rng.normal(0, 3, 10)
+    a = correlate(scores_frame(x), human_frame(y), n_boot=500, seed=7)
+    b = correlate(scores_frame(x), human_frame(y), n_boot=500, seed=7)
+    c = correlate(scores_frame(x), human_frame(y), n_boot=500, seed=8)
+    pd.testing.assert_frame_equal(a, b)
+    assert a.spearman_ci_low.iloc[0] != c.spearman_ci_low.iloc[0] or a.kendall_ci_low.iloc[0] != c.kendall_ci_low.iloc[0]
+    r = a.iloc[0]
+    assert r.spearman_ci_low <= r.spearman_rho <= r.spearman_ci_high
+    assert r.kendall_ci_low <= r.kendall_tau_b <= r.kendall_ci_high
+    # a clean monotone example: every defined resample is a perfect correlation
+    mono = correlate(scores_frame(x), human_frame(np.exp(x / 3)), n_boot=400, seed=3).iloc[0]
+    assert mono.spearman_rho == pytest.approx(1.0) and mono.kendall_tau_b == pytest.approx(1.0)
+    assert mono.spearman_ci_low <= mono.spearman_rho <= mono.spearman_ci_high
+    assert mono.kendall_ci_low <= mono.kendall_tau_b <= mono.kendall_ci_high
+    assert mono.spearman_ci_low == pytest.approx(1.0)
+
+
+def test_percentiles_are_of_the_resampled_conditions():
+    """The CI is the percentile interval of rho over resamples drawn as default_rng(seed).integers(0, n, (B, n))."""
+    x, y = np.array(TIED_X), np.array(TIED_Y)
+    idx = np.random.default_rng(11).integers(0, 8, size=(300, 8))
+    rhos = []
+    for row in idx:
+        if np.ptp(x[row]) > 0 and np.ptp(y[row]) > 0:
+            rhos.append(stats.spearmanr(x[row], y[row]).statistic)
+    r = correlate(scores_frame(x), human_frame(y), n_boot=300, seed=11).iloc[0]
+    lo, hi = np.percentile(rhos, [2.5, 97.5])
+    assert (r.spearman_ci_low, r.spearman_ci_high) == (pytest.approx(lo, abs=1e-12), pytest.approx(hi, abs=1e-12))
+
+
+# --- undefined and mismatched inputs ---------------------------------------------------------------
+
+def test_constant_metric_gives_a_row_with_a_note():
+    t = correlate(pd.concat([scores_frame([2.0, 2.0, 2.0, 2.0], "flat"), scores_frame([1.0, 2.0, 3.0, 4.0], "ape")]),
+                  human_frame([1.0, 3.0, 2.0, 4.0]), n_boot=50)
+    flat = t.set_index("metric").loc["flat"]
+    assert math.isnan(flat.spearman_rho) and math.isnan(flat.kendall_tau_b) and math.isnan(flat.spearman_ci_low)
+    assert "metric constant across conditions" in flat.note and flat.agrees is None
+    assert np.isfinite(t.set_index("metric").loc["ape", "spearman_rho"])
+    const_h = correlate(scores_frame([1.0, 2.0, 3.0]), human_frame([5.0, 5.0, 5.0]), n_boot=10).iloc[0]
+    assert "human measure constant" in const_h.note
+
+
+def test_missing_values_are_left_out_per_metric():
+    t = correlate(scores_frame([1.0, np.nan, 3.0, 4.0]), human_frame([1.0, 2.0, 3.0, 5.0]), n_boot=0).iloc[0]
+    assert t.n == 3 and t.conditions == "c0;c2;c3" and "no value for c1" in t.note
+    few = correlate(scores_frame([1.0, np.nan, np.nan, 4.0]), human_frame([1.0, 2.0, 3.0, 5.0]), n_boot=0).iloc[0]
+    assert few.n == 2 and math.isnan(few.spearman_rho) and "needs 3" in few.note
+
+
+def test_condition_mismatch_names_conditions_and_files():
+    s = scores_frame([1.0, 2.0, 3.0, 4.0], conds=["A", "B", "C", "natural"])
+    s.attrs["path"] = "scores/summary.csv"
+    h = human_frame([1.0, 2.0, 3.0, 4.0], conds=["A", "B", "C", "NA"])
+    h.attrs["path"] = "analysis/ratings.csv"
+    with pytest.raises(InputError) as err:
+        correlate(s, h)
+    msg = str(err.value)
+    assert "scores (scores/summary.csv) but not the human judgements: natural" in msg
+    assert "human judgements (analysis/ratings.csv) but not the scores: NA" in msg
+    notes = []
+    t = correlate(s, h, shared_only=True, notes=notes, n_boot=0)
+    assert t.iloc[0].n == 3 and any("natural" in n for n in notes) and any("NA" in n for n in notes)
+
+
+def test_fewer_than_three_shared_conditions():
+    with pytest.raises(InputError, match="2 condition.*shared.*A, B.*at least 3"):
+        correlate(scores_frame([1.0, 2.0], conds=["A", "B"]), human_frame([1.0, 2.0], conds=["A", "B"]))
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("condition,metric,value\nA,ape,1\nB,ape,abc\n", r"s\.csv:3: value: 'abc' is not a number; expected a finite number"),
+    ("condition,metric,value\nA,ape,1\nA,ape,2\n", r"s\.csv:3: condition: metric / condition 'ape / A' appears twice \(lines 2, 3\)"),
+    ("condition,metric,value\nA,ape\n", r"s\.csv:2: row has 2 fields but the header has 3"),
+    ("cond,val\nA,1\n", r"s\.csv:1: missing column\(s\) condition, value; expected the summary\.csv"),
+    ("condition,metric,value\n,ape,1\n", r"s\.csv:2: condition: empty value; expected a condition name"),
+    ("", r"s\.csv:1: empty file"),
+])
+def test_malformed_scores_name_file_line_column(tmp_path, text, expected):
+    p = tmp_path / "s.csv"
+    p.write_text(text)
+    with pytest.raises(InputError, match=expected):
+        read_scores(p)
+
+
+def test_malformed_human_files(tmp_path):
+    p = tmp_path / "h.csv"
+    p.write_text("question,condition,median,mean\nq,A,50,x\n")
+    with pytest.raises(InputError, match=r"h\.csv:2: mean: 'x' is not a number"):
+        read_human(p)
+    p.write_text("who,what\nA,1\n")
+    with pytest.raises(InputError, match=r"h\.csv:1: unrecognised header \(who, what\); expected ratings\.csv"):
+        read_human(p)
+    p.write_text("question,condition,median,mean\nq,A,50,40\n")
+    with pytest.raises(InputError, match=r"no measure 'elo' in this ratings file; it has: median, mean"):
+        read_human(p, measures=["elo"])
+    with pytest.raises(InputError, match="results file: run `evalsuite analyze`"):
+        read_human(SAMPLE)
+
+
+def test_plain_files_keep_na_as_a_name(tmp_path):
+    p = tmp_path / "mos.csv"
+    p.write_text("condition,value\nNA,4.5\nA,3.1\nB,2.0\n")
+    h = read_human(p)
+    assert list(h["condition"]) == ["NA", "A", "B"] and set(h["measure"]) == {"mos"}
+    s = read_scores(p)
+    assert s.attrs["plain"] and set(s["metric"]) == {"mos"}
+
+
+# --- the command on real `evalsuite score` and `evalsuite analyze` outputs -------------------------
+
+def invoke(*args):
+    return CliRunner().invoke(main, [*map(str, args)], catch_exceptions=False)
+
+
+@pytest.fixture(scope="module")
+def real(tmp_path_factory):
+    """summary.csv of `evalsuite score` with the study's condition names, and `evalsuite analyze` of the
+    bundled simulated results."""
+    from evalsuite.metrics.demo import build_conditions
+
+    root = tmp_path_factory.mktemp("correlate")
+    f = build_conditions(root, seed=3)
+    r = invoke("score", "-r", f"NA={f['natural']}", f"BL={f['mismatched']}", f"Jitter={f['jitter']}",
+               f"SysA={f['smoothed']}", f"SysB={f['static']}", "--quiet", "--no-figures", "-o", root / "scores")
+    assert r.exit_code == 0, r.output
+    r = invoke("analyze", SAMPLE, "-o", root / "analysis", "--bootstrap", "100", "--no-figures")
+    assert r.exit_code == 0, r.output
+    return root
+
+
+def test_cli_writes_every_output_from_real_score_and_analyze(real, tmp_path):
+    summary, ratings = real / "scores" / "summary.csv", real / "analysis" / "ratings.csv"
+    out = tmp_path / "corr"
+    r = invoke("correlate", summary, ratings, "-o", out, "--results", SAMPLE, "--bootstrap", "200")
+    assert r.exit_code == 0, r.output
+    table = pd.read_csv(out / "correlations.csv", keep_default_na=False, na_values=[""])
+    assert list(table.columns) == COLUMNS
+    metrics = list(dict.fromkeys(pd.read_csv(summary)["metric"]))
+    assert set(table["metric"]) == set(metrics) and set(table["measure"]) == {"median", "mean"}
+    assert len(table) == 2 * len(metrics)
+    for m in metrics:
+        assert (out / "figures" / f"scatter_{re.sub(r'[^A-Za-z0-9_-]', '_', m)}.png").stat().st_size > 1000
+    assert (out / "correlations.md").read_text().startswith("| metric | human measure | n | rho |")
+    assert "\\begin{tabular}" in (out / "correlations.tex").read_text()
+    # the numbers are scipy's on the two files
+    s = pd.read_csv(summary, keep_default_na=False)
+    h = pd.read_csv(ratings, keep_default_na=False)
+    x = s[s.metric == "ape"].set_index("condition")["value"].astype(float)[STUDY]
+    y = h.set_index("condition")["median"].astype(float)[STUDY]
+    row = table[(table.metric == "ape") & (table.measure == "median")].iloc[0]
+    assert row.spearman_rho == pytest.approx(stats.spearmanr(x, y).statistic, abs=1e-15)
+    assert row.kendall_p == pytest.approx(stats.kendalltau(x, y).pvalue, abs=1e-15)
+    assert row.conditions == ";".join(STUDY) and row.n == 5 and row.better == "lower"
+    assert np.isfinite(row.spearman_ci_low_participants) and np.isfinite(row.kendall_ci_high_participants)
+    assert "median (hl_rating)" in r.output and "Wrote" in r.output
+
+
+def test_cli_elo_pairwise_and_participant_bootstrap(real, tmp_path):
+    summary = real / "scores" / "summary.csv"
+    elo = real / "analysis" / "elo.csv"
+    r = invoke("correlate", summary, elo, "-o", tmp_path / "e", "--exclude", "Jitter", "--bootstrap", "100",
+               "--results", SAMPLE, "--no-figures")
+    assert r.exit_code == 0, r.output
+    t = pd.read_csv(tmp_path / "e" / "correlations.csv")
+    assert set(t["measure"]) == {"elo", "win_rate"} and (t["n"] == 4).all()
+    # pairwise.csv -> win rates equal to elo.csv's (matched-vs-mismatched comparisons left out)
+    pw = read_human(real / "analysis" / "pairwise.csv")
+    el = read_human(elo, measures=["win_rate"])
+    assert set(pw["question"]) == {"human_likeness"}
+    assert dict(zip(pw.condition, pw.value)) == pytest.approx(dict(zip(el.condition, el.value)), abs=1e-12)
+    # the participant bootstrap recomputes each measure exactly as `evalsuite analyze` did
+    res = ParticipantResampler.from_results(SAMPLE)
+    for name in ("ratings", "elo", "pairwise", "likert_means"):
+        h = read_human(real / "analysis" / f"{name}.csv")
+        for (q, m), g in h.groupby(["question", "measure"]):
+            assert res.point(h.attrs["source"], q, m, list(g.condition)) == pytest.approx(g.value.to_numpy(), abs=1e-9)
+            reps = res.replicates(h.attrs["source"], q, m, list(g.condition), 50, 1)
+            assert reps.shape == (50, len(g)) and np.isfinite(reps).all()
+
+
+def test_cli_errors_are_one_line(real, tmp_path):
+    summary, ratings = real / "scores" / "summary.csv", real / "analysis" / "ratings.csv"
+    r = invoke("correlate", summary, real / "analysis" / "elo.csv", "-o", tmp_path / "x")
+    assert r.exit_code == 1 and "Traceback" not in r.output
+    assert f"human judgements ({real / 'analysis' / 'elo.csv'}) but not the scores" not in r.output
+    assert f"in the scores ({summary}) but not the human judgements: Jitter" in r.output
+    r = invoke("correlate", summary, ratings, "--rename", "NA=natural", "-o", tmp_path / "x")
+    assert r.exit_code == 1 and "but not the scores: NA" in r.output and "but not the human judgements: natural" in r.output
+    changed = tmp_path / "ratings.csv"
+    changed.write_text(ratings.read_text().replace(",SysA,,36,9,67.5,", ",SysA,,36,9,60.0,"))
+    r = invoke("correlate", summary, changed, "--results", SAMPLE, "-o", tmp_path / "x")
+    assert r.exit_code == 1 and "median of 'SysA' is 60 here but 67.5 recomputed" in r.output
+    r = invoke("correlate", summary, ratings, "--metric", "nope", "-o", tmp_path / "x")
+    assert r.exit_code == 1 and "no metric 'nope'" in r.output
+
+
+def test_cli_published_numbers_and_help(tmp_path):
+    fgd = tmp_path / "fgd.csv"
+    fgd.write_text("condition,value\nA,10.5\nB,22.0\nC,3.1\nD,40.0\n")
+    mos = tmp_path / "human.csv"
+    mos.write_text("condition,value\nA,3.9\nB,3.0\nC,4.2\nD,2.5\n")
+    r = invoke("correlate", fgd, mos, "--metric", "fgd", "-o", tmp_path / "o", "--bootstrap", "100")
+    assert r.exit_code == 0, r.output
+    row = pd.read_csv(tmp_path / "o" / "correlations.csv").iloc[0]
+    assert row.metric == "fgd" and row.human_measure == "human" and row.spearman_rho == -1.0 and bool(row.agrees)
+    assert (tmp_path / "o" / "figures" / "scatter_fgd.png").is_file()
+    r = invoke("correlate", "--help")
+    assert r.exit_code == 0 and "Example:" in r.output and "evalsuite correlate scores/summary.csv" in r.output
+    assert "correlate" in invoke("--help").output
+
+
+# --- the analysis report --------------------------------------------------------------------------
+
+def test_analyze_scores_adds_the_report_section(real, tmp_path):
+    out = tmp_path / "report"
+    summary = pd.read_csv(real / "scores" / "summary.csv", keep_default_na=False)
+    few = tmp_path / "summary.csv"   # three of the metrics: fewer figures to draw
+    summary[summary.metric.isin(["ape", "speed", "cca"])].to_csv(few, index=False)
+    r = invoke("analyze", SAMPLE, "-o", out, "--bootstrap", "100", "--scores", few)
+    assert r.exit_code == 0, r.output
+    page = (out / "report.html").read_text()
+    assert "<h2>Metrics vs humans</h2>" in page and "median (hl_rating)" in page and "elo (human_likeness)" in page
+    assert (out / "correlations.csv").is_file() and (out / "figures" / "scatter_ape.png").is_file()
+    assert "only in the scores, left out: Jitter" in r.output    # the anchor is not in the pairwise study
+    t = pd.read_csv(out / "correlations.csv")
+    assert np.isfinite(t["spearman_ci_low_participants"]).any()
+
+
+def test_blind_analysis_section_shows_no_real_names(real, tmp_path):
+    out = tmp_path / "blind"
+    r = invoke("analyze", SAMPLE, "-o", out, "--bootstrap", "50", "--no-figures", "--blind",
+               "--scores", real / "scores" / "summary.csv")
+    assert r.exit_code == 0, r.output
+    page = (out / "report.html").read_text()
+    assert "<h2>Metrics vs humans</h2>" in page
+    section = page[page.index("<h2>Metrics vs humans</h2>"):]
+    for name in ("SysA", "SysB", "Jitter"):
+        assert name not in section and name not in r.output
+    conds = pd.read_csv(out / "correlations.csv")["conditions"]
+    assert all(re.fullmatch(r"(B\d\d;?)+", c) for c in conds)
+
+
+def test_analyze_scores_malformed_stops_before_the_analysis(tmp_path):
+    bad = tmp_path / "summary.csv"
+    bad.write_text("condition,metric,value\nA,ape,x\n")
+    r = invoke("analyze", SAMPLE, "-o", tmp_path / "r", "--scores", bad)
+    assert r.exit_code == 1 and "summary.csv:2: value: 'x' is not a number" in r.output
+    assert not (tmp_path / "r" / "report.html").exists()
