@@ -23,12 +23,13 @@ from typing import Any
 from evalsuite.errors import InputError
 
 __all__ = ["Condition", "Plan", "build_plan", "check_synthetic", "generate_conditions", "parse_models",
-           "OFFSETS", "AMPLITUDES", "JITTER", "SMOOTHING"]
+           "OFFSETS", "AMPLITUDES", "JITTER", "SMOOTHING", "PARALLEL_FROM"]
 
 OFFSETS = (0.1, 0.3, 0.6, 1.2)          # seconds
 AMPLITUDES = (0.75, 0.5, 0.25)          # gesture scale: attenuated by 25, 50, 75 %
 JITTER = (0.005, 0.01, 0.02)            # radians on every rotation vector; 0.02 is the GENEA Leaderboard's
 SMOOTHING = (5, 9, 15)                  # moving-average windows in frames (at 30 fps: 0.17, 0.3, 0.5 s)
+PARALLEL_FROM = 60                      # segments: fewer are generated in this process (see generate_conditions)
 
 
 @dataclass(frozen=True)
@@ -123,8 +124,9 @@ def check_synthetic(corpus: Any) -> None:
     model = (corpus.meta.get("corpus_json") or corpus.meta).get("model")
     if not isinstance(model, dict) or "params" not in model:
         raise InputError("not a synthetic-speaker corpus (its corpus.json has no model parameters): the known-truth "
-                         "benchmark needs the oracle, which exists only for corpora written by "
-                         "`evalsuite corpus synth` (e.g. evalsuite corpus synth -o corpus/ --minutes 10 --seed 0)",
+                         "benchmark needs the oracle, which exists only for corpora written by the synthetic "
+                         "speaker: evalsuite corpus-synth -o corpus/ --minutes 10 --seed 0 (soon `evalsuite corpus "
+                         "synth`)",
                          path=corpus.root, field="--corpus")
 
 
@@ -132,7 +134,9 @@ def generate_conditions(plan: Plan, corpus: Any, requests: Sequence[Any], out_di
                         jobs: int = 1, progress: bool = True,
                         echo: Callable[[str], None] | None = None) -> dict[str, pathlib.Path]:
     """Generate every condition of ``plan`` into ``out_dir/<condition>/`` (the runner's cache makes a rerun with
-    the same settings instant) -> condition name -> folder."""
+    the same settings instant) -> condition name -> folder. The built-in conditions take milliseconds per
+    segment, so worker processes (which cost seconds each to start, per condition) are used only from
+    :data:`PARALLEL_FROM` segments on."""
     from evalsuite.generators import find_generator
     from evalsuite.generators.runner import generate
 
@@ -146,7 +150,9 @@ def generate_conditions(plan: Plan, corpus: Any, requests: Sequence[Any], out_di
         if cond.of is not None:
             config["of"] = str(folders[cond.of].resolve())
         folder = out_dir / cond.name
-        run = generate(entry, requests, folder, config=config, model_dir=cond.model_dir, seed=seed, jobs=jobs,
+        parallel = cond.model_dir is not None or len(requests) >= PARALLEL_FROM
+        run = generate(entry, requests, folder, config=config, model_dir=cond.model_dir, seed=seed,
+                       jobs=jobs if parallel else 1,
                        progress=progress, extra_record={"validity_condition": cond.name})
         if echo is not None:
             echo(f"  {cond.name:<18} {len(run.files)} files" + (" (up to date)" if run.cached else ""))
