@@ -110,8 +110,12 @@ def write_heatmap(results: Sequence[FamilyResult], path: pathlib.Path) -> list[p
 
     metrics, families, cell = _grid(results)
     grid = np.array([[cell[(m, f)].tau if (m, f) in cell else np.nan for f in families] for m in metrics])
+    # a blind cell's tau orders differences within the bootstrap noise: grey, not coloured
+    blind = np.array([[(m, f) in cell and cell[(m, f)].verdict in ("blind", "n/a") for f in families]
+                      for m in metrics])
     fig, ax = plt.subplots(figsize=(1.0 + 0.75 * len(families), 1.2 + 0.28 * len(metrics)))
-    im = ax.imshow(np.ma.masked_invalid(grid), cmap="RdBu", vmin=-1, vmax=1, aspect="auto")
+    ax.imshow(np.where(blind, 1.0, np.nan), cmap="Greys", vmin=0, vmax=5, aspect="auto")
+    im = ax.imshow(np.ma.masked_where(blind | ~np.isfinite(grid), grid), cmap="RdBu", vmin=-1, vmax=1, aspect="auto")
     ax.set_xticks(range(len(families)), families, rotation=45, ha="right")
     ax.set_yticks(range(len(metrics)), metrics, fontsize=8)
     marks = {"correct": "✓", "partial": "~", "blind": "o", "inverted": "x", "n/a": ""}
@@ -119,11 +123,11 @@ def write_heatmap(results: Sequence[FamilyResult], path: pathlib.Path) -> list[p
         for j, f in enumerate(families):
             r = cell.get((m, f))
             if r is not None:
-                ax.text(j, i, marks[r.verdict], ha="center", va="center", fontsize=8,
-                        color="white" if math.isfinite(r.tau) and abs(r.tau) > 0.6 else "black")
+                dark = not blind[i, j] and math.isfinite(r.tau) and abs(r.tau) > 0.6
+                ax.text(j, i, marks[r.verdict], ha="center", va="center", fontsize=8, color="white" if dark else "black")
     fig.colorbar(im, ax=ax, label="Kendall τ with the true order", shrink=0.6)
-    ax.set_title("Which metric orders which degradation correctly\n(✓ correct, ~ partial, o blind, x inverted)",
-                 fontsize=9)
+    ax.set_title("Which metric orders which degradation correctly\n(✓ correct, ~ partial, x inverted; grey o: blind, "
+                 "within bootstrap noise)", fontsize=9)
     fig.tight_layout()
     out = []
     for ext in ("png", "svg"):
