@@ -30,8 +30,6 @@ COMMANDS = {
     "corpus": "evalsuite.corpus.cli:corpus",
     "features": "evalsuite.features.cli:features",
     "validate-metrics": "evalsuite.validity.cli:validate_metrics",
-    # temporary: joins the `corpus` group (evalsuite/corpus/cli.py) as `evalsuite corpus synth`
-    "corpus-synth": "evalsuite.corpus.synth_cli:synth",
     "correlate": "evalsuite.analysis.correlate_cli:correlate",
 }
 

@@ -8,10 +8,11 @@ from __future__ import annotations
 
 from collections import Counter
 
-from flask import Blueprint, Response, current_app, redirect, render_template, request, session, url_for
+from flask import Blueprint, Response, current_app, jsonify, redirect, render_template, request, session, url_for
 
 from study_app.context import get_store, get_study
 from study_app.export import raw_json, result_rows, results_csv
+from study_app.monitor import participant_rows, status_counts, unplayable_reports
 from study_app.pages import get_kind
 from study_app.security import admin_logins, admin_required, check_token
 from study_app.storage import utcnow
@@ -66,7 +67,29 @@ def overview():
                           else "reserved (expired)" for p in plans)
     return render_template("admin.html", study=study, statuses=statuses, comparisons=sorted(comparisons.items()),
                            failures=failures, plans=plans, plan_counts=plan_counts,
-                           n_answers=len(dump["answers"]), now=now)
+                           n_answers=len(dump["answers"]), now=now,
+                           participants=participant_rows(store, study, now),
+                           reports=unplayable_reports(store, study), refresh_seconds=_refresh_seconds())
+
+
+def _refresh_seconds() -> int:
+    """How often the admin page polls status.json (``ADMIN_REFRESH_SECONDS``, default 15)."""
+    return int(current_app.config.get("ADMIN_REFRESH_SECONDS", 15))
+
+
+@bp.route("/status.json")
+@admin_required
+def status_json():
+    """What the admin page refreshes by itself: session counts, the participant table and the
+    "does not play" reports (admin token: the login cookie or ``Authorization: Bearer``)."""
+    study, store = get_study(), get_store()
+    now = utcnow()
+    statuses = status_counts(store, study)
+    return jsonify(study=study.id, generated_at=now.isoformat(timespec="seconds") + "Z",
+                   refresh_seconds=_refresh_seconds(),
+                   sessions={"started": sum(statuses.values()), **{k: statuses.get(k, 0) for k in
+                                                                    ("active", "finished", "failed", "expired")}},
+                   participants=participant_rows(store, study, now), reports=unplayable_reports(store, study))
 
 
 @bp.route("/export/results.csv")

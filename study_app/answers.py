@@ -13,7 +13,10 @@ from study_app.pages import Outcome, get_kind
 from study_app.payload import PayloadError, int_in, only_keys, require_dict
 
 TOKEN_RE = re.compile(r"^[A-Za-z0-9_-]{8,64}$")
-EVENT_KINDS = ("play", "pause", "seeked", "ended", "choice", "reload", "hidden", "visible", "resize")
+# "unplayable": the participant reports that a video (slot) or every video of the page (slot null) does
+# not play; the admin page counts these reports per stimulus.
+EVENT_KINDS = ("play", "pause", "seeked", "ended", "choice", "reload", "hidden", "visible", "resize",
+               "unplayable")
 MAX_EVENTS = 2000
 
 

@@ -12,7 +12,7 @@ from study_app.context import install
 from study_app.definition import Study, load_study
 from study_app.design import default_plans_path, read_plans
 from study_app.errors import StudyStateError
-from study_app.pages import page_kinds
+from study_app.pages import get_kind, page_kinds
 from study_app.policy import Rules
 from study_app.storage import Store, init_db, make_engine
 
@@ -78,6 +78,7 @@ def create_app(config: dict) -> Flask:
         app.jinja_loader = ChoiceLoader([*loaders, FileSystemLoader(folders)])
     csrf.init_app(app)
     app.context_processor(lambda: {"study": study})
+    app.jinja_env.globals["page_kind"] = get_kind     # templates ask a kind e.g. for its media word
 
     from study_app.admin import bp as admin_bp
     from study_app.media import bp as media_bp

@@ -33,28 +33,31 @@ def _text_image(text: str, width: int, height: int) -> np.ndarray:
 
 
 def write_clip(path, seed: int, seconds: float = 1.0, fps: int = 10, text: str | None = None,
-               text_from: float = 0.4):
-    """Write one placeholder clip; ``text`` is overlaid from ``text_from`` of its duration."""
+               text_from: float = 0.4, size: tuple[int, int] = (WIDTH, HEIGHT)):
+    """Write one placeholder clip of ``size`` (width, height; multiples of 8); ``text`` is overlaid from
+    ``text_from`` of its duration."""
     import imageio_ffmpeg
+
+    width, height = size
 
     n = max(2, int(round(seconds * fps)))
     rng = np.random.default_rng(seed)
     colour = rng.integers(60, 255, size=3)
     speed = rng.uniform(0.5, 2.0)
     t = np.arange(n)[:, None]
-    x = np.arange(WIDTH)[None, :]
+    x = np.arange(width)[None, :]
     # A vertical bar sweeping across the frame: one boolean mask per frame, no per-frame loop.
-    centre = ((t * speed * WIDTH / n) + rng.integers(0, WIDTH)) % WIDTH
+    centre = ((t * speed * width / n) + rng.integers(0, width)) % width
     bar = np.abs(x - centre) < 12                                     # (n, W)
-    frames = np.zeros((n, HEIGHT, WIDTH, 3), np.uint8)
+    frames = np.zeros((n, height, width, 3), np.uint8)
     frames[:] = (colour // 4).astype(np.uint8)
-    frames[np.broadcast_to(bar[:, None, :], (n, HEIGHT, WIDTH))] = colour.astype(np.uint8)
+    frames[np.broadcast_to(bar[:, None, :], (n, height, width))] = colour.astype(np.uint8)
     if text:
-        mask = _text_image(text, WIDTH, HEIGHT) > 0.5
+        mask = _text_image(text, width, height) > 0.5
         start = int(n * text_from)
         frames[start:, :, :, :] = (frames[start:] * 0.3).astype(np.uint8)
         frames[start:][:, mask] = 255
-    writer = imageio_ffmpeg.write_frames(str(path), (WIDTH, HEIGHT), fps=fps, codec="libx264",
+    writer = imageio_ffmpeg.write_frames(str(path), (width, height), fps=fps, codec="libx264",
                                          pix_fmt_out="yuv420p", macro_block_size=8,
                                          output_params=["-movflags", "+faststart"],
                                          ffmpeg_log_level="error")
@@ -83,11 +86,12 @@ def blinded_name(*parts) -> str:
 
 def make_sample_stimuli(folder, conditions, segments, *, mismatched=False,
                         attention: Sequence[tuple[str, str]] = (), seconds: float = 1.0, fps: int = 10,
-                        salt: str = "evalsuite") -> pathlib.Path:
+                        salt: str = "evalsuite", size: tuple[int, int] = (WIDTH, HEIGHT)) -> pathlib.Path:
     """Write clips and ``manifest.csv`` into ``folder``; returns the manifest path.
 
     ``attention`` lists ``(segment, expected)`` attention-check clips to add; ``mismatched``
-    adds, for every condition and segment, a clip whose motion comes from the next segment.
+    adds, for every condition and segment, a clip whose motion comes from the next segment; ``size``
+    is the clips' (width, height), e.g. ``(256, 144)`` for 16:9.
     """
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -96,18 +100,18 @@ def make_sample_stimuli(folder, conditions, segments, *, mismatched=False,
     for c in conditions:
         for i, s in enumerate(segments):
             name = blinded_name(salt, c, s)
-            write_clip(folder / name, seed, seconds, fps)
+            write_clip(folder / name, seed, seconds, fps, size=size)
             rows.append({"file": name, "condition": c, "segment": s})
             seed += 1
             if mismatched:
                 other = segments[(i + 1) % len(segments)]
                 name = blinded_name(salt, c, s, other)
-                write_clip(folder / name, seed, seconds, fps)
+                write_clip(folder / name, seed, seconds, fps, size=size)
                 rows.append({"file": name, "condition": c, "segment": s, "motion_segment": other})
                 seed += 1
     for k, (s, expected) in enumerate(attention):
         name = blinded_name(salt, "attention", s, expected, k)
-        write_clip(folder / name, 1000 + k, seconds, fps, text=_attention_text(expected))
+        write_clip(folder / name, 1000 + k, seconds, fps, text=_attention_text(expected), size=size)
         rows.append({"file": name, "condition": "", "segment": s, "kind": "attention",
                      "expected": expected})
     path = folder / "manifest.csv"

@@ -84,7 +84,9 @@ def admin_required(view: Callable[..., Any]) -> Callable[..., Any]:
     @wraps(view)
     def wrapped(*args: Any, **kwargs: Any) -> Any:
         if not admin_authorised():
-            if request.headers.get("Authorization") or request.path.startswith("/admin/export"):
+            # scripts, downloads and the admin page's own JSON polling get 403, not the login form
+            if (request.headers.get("Authorization") or request.path.startswith("/admin/export")
+                    or request.path.endswith(".json")):
                 abort(403)
             return redirect(url_for("admin.login"))
         return view(*args, **kwargs)

@@ -211,12 +211,12 @@ def test_one_seed_gives_byte_identical_files(tmp_path, corpus_dir):
 def test_command_writes_a_corpus_and_refuses_a_full_folder(tmp_path):
     out = tmp_path / "c"
     runner = CliRunner()
-    res = runner.invoke(main, ["corpus-synth", "-o", str(out), "--minutes", "0.5", "--seed", "3",
+    res = runner.invoke(main, ["corpus", "synth", "-o", str(out), "--minutes", "0.5", "--seed", "3",
                                "--segment-seconds", "10"])
     assert res.exit_code == 0, res.output
     assert "Wrote 4 segments" in res.output
     assert load_motion(next(out.rglob("*.bvh"))).fps == 30.0
-    res = runner.invoke(main, ["corpus-synth", "-o", str(out), "--minutes", "0.5", "--quiet"])
+    res = runner.invoke(main, ["corpus", "synth", "-o", str(out), "--minutes", "0.5", "--quiet"])
     assert res.exit_code == 1 and "not empty" in res.output
 
 

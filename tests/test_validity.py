@@ -145,7 +145,7 @@ def test_a_corpus_that_is_not_synthetic_is_refused_with_the_way_out(tmp_path):
     result = CliRunner().invoke(main, ["validate-metrics", "--corpus", str(tmp_path / "tiny"), "-o",
                                        str(tmp_path / "out"), "--quiet"])
     assert result.exit_code == 1
-    assert "evalsuite corpus-synth" in result.output and "not a synthetic-speaker corpus" in result.output
+    assert "evalsuite corpus synth" in result.output and "not a synthetic-speaker corpus" in result.output
     assert "Traceback" not in result.output
 
 

@@ -136,11 +136,10 @@ def _audio_files(audio_dir: str | pathlib.Path, ref_names: list[str], issues: li
 
 
 def _load_corpus(path: str | pathlib.Path) -> Any:
-    """The corpus at ``path``. TO BE REPLACED by ``evalsuite.corpus.load_corpus`` (the corpus readers) when
-    they are merged; until then this reads the synthetic speaker's GENEA 2023 layout only."""
-    from evalsuite.corpus.synth.layout import read_synth_corpus
+    """The corpus at ``path``, in any layout :func:`evalsuite.corpus.load_corpus` reads."""
+    from evalsuite.corpus.readers import load_corpus
 
-    return read_synth_corpus(path)
+    return load_corpus(path)
 
 
 def _corpus_segments(corpus_dir: str | pathlib.Path, ref_names: list[str], issues: list[str]) -> dict[str, Any]:

@@ -125,8 +125,7 @@ def check_synthetic(corpus: Any) -> None:
     if not isinstance(model, dict) or "params" not in model:
         raise InputError("not a synthetic-speaker corpus (its corpus.json has no model parameters): the known-truth "
                          "benchmark needs the oracle, which exists only for corpora written by the synthetic "
-                         "speaker: evalsuite corpus-synth -o corpus/ --minutes 10 --seed 0 (soon `evalsuite corpus "
-                         "synth`)",
+                         "speaker: evalsuite corpus synth -o corpus/ --minutes 10 --seed 0",
                          path=corpus.root, field="--corpus")
 
 

@@ -1,6 +1,8 @@
 """``mushra``: several videos of one segment rated on 0-100 sliders (MUSHRA-style, ITU-R BS.1534), with
 an optional hidden reference and anchor; slot order rotates so each condition is in each slot equally
-often."""
+often. Displayed side by side (``layout: grid``) or as HEMVIP does (``layout: hemvip``: one player, a
+button per video above vertical sliders on one labelled scale); ``slider_numbers: false`` hides the
+numbers."""
 from __future__ import annotations
 
 import math
@@ -10,6 +12,9 @@ from study_app.pages.base import BlockKind, Media, Outcome, export_condition
 from study_app.payload import PayloadError, int_in, only_keys
 
 DEFAULT_BANDS = ["Bad", "Poor", "Fair", "Good", "Excellent"]
+# How a page shows its videos: "grid" (every video with its own horizontal slider, side by side) or
+# "hemvip" (one player; a button per video above vertical sliders side by side on one labelled scale).
+LAYOUTS = ("grid", "hemvip")
 
 
 def expected_interval(expected: str, bands: list[str]) -> tuple[float, float] | None:
@@ -34,7 +39,7 @@ def check_passes(expected: str, rating: int, bands: list[str], tolerance: int) -
 
 class MushraKind(BlockKind):
     name = "mushra"
-    keys = BlockKind.keys + ("reference", "anchor", "question", "bands", "tolerance")
+    keys = BlockKind.keys + ("reference", "anchor", "question", "bands", "tolerance", "layout", "slider_numbers")
     script = "pages/mushra.js"
     attention_hint = ", segment of this block"
 
@@ -53,6 +58,11 @@ class MushraKind(BlockKind):
                            "text": chk.get(q, "text", f"{where}.question", str, required=True)}
         cfg["bands"] = chk.str_list(page, "bands", where, default=list(DEFAULT_BANDS), min_len=2)
         cfg["tolerance"] = chk.int_range(page, "tolerance", where, 0, 50, default=3)
+        layout = chk.get(page, "layout", where, str, default="grid", expected=" or ".join(LAYOUTS))
+        if layout not in LAYOUTS:
+            chk.fail(f"{where}.layout", f"expected one of {', '.join(LAYOUTS)}, got {layout!r}")
+        cfg["layout"] = layout
+        cfg["slider_numbers"] = chk.get(page, "slider_numbers", where, bool, default=True)
 
     def shown_conditions(self, cfg: dict) -> list[str]:
         return list(cfg["conditions"]) + [c for c in (cfg.get("reference"), cfg.get("anchor")) if c]

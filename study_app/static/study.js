@@ -68,7 +68,14 @@
       });
       return;
     }
-    b.textContent = v.paused ? (v.ended || done.has(Number(v.getAttribute("data-slot"))) ? "Play again" : "Play") : "Pause";
+    var word = v.paused ? (v.ended || done.has(Number(v.getAttribute("data-slot"))) ? "Play again" : "Play") : "Pause";
+    if (b.hasAttribute("data-icon")) {
+      // compact buttons (HEMVIP display): a symbol, the words for screen readers
+      b.textContent = {"Play": "\u25B6", "Play again": "\u21BB", "Pause": "\u275A\u275A"}[word];
+      b.setAttribute("aria-label", word + " video " + (Number(v.getAttribute("data-slot")) + 1));
+    } else {
+      b.textContent = word;
+    }
   }
   function markDone(slot) {
     done.add(slot);
@@ -107,6 +114,91 @@
   });
   (data.require_full_playback ? data.ended || [] : data.played || []).forEach(function (s) { markDone(Number(s)); });
   videos.forEach(refreshButton);
+
+  // ---- fit the page to the window: videos keep their aspect ratio and shrink (down to a minimum) until
+  // the question and Next are visible without scrolling; a page too long for that keeps larger videos
+  var MIN_VIDEO_H = 96;
+  var fitQueued = false;
+  function visibleVideos() {
+    return videos.filter(function (v) { return v.tagName === "VIDEO" && v.offsetParent !== null; });
+  }
+  function fit() {
+    fitQueued = false;
+    var vids = visibleVideos();
+    if (!vids.length) return;
+    form.style.setProperty("--video-max-h", Math.max(MIN_VIDEO_H, window.innerHeight) + "px");
+    for (var i = 0; i < 4; i++) {
+      var over = document.documentElement.scrollHeight - window.innerHeight;
+      if (over <= 0) break;
+      var rows = new Set(vids.map(function (v) { return Math.round(v.getBoundingClientRect().top); })).size;
+      var h = Math.max.apply(null, vids.map(function (v) { return v.getBoundingClientRect().height; }));
+      var target = Math.floor(h - Math.ceil(over / rows) - 1);
+      if (target < MIN_VIDEO_H) {
+        // the page cannot fit even with small videos (many statements, a phone): it scrolls anyway,
+        // so the videos keep a comfortable size
+        form.style.setProperty("--video-max-h", Math.max(MIN_VIDEO_H, Math.round(window.innerHeight * 0.45)) + "px");
+        break;
+      }
+      if (target >= h) break;
+      form.style.setProperty("--video-max-h", target + "px");
+    }
+  }
+  function queueFit() {
+    if (fitQueued) return;
+    fitQueued = true;
+    requestAnimationFrame(fit);
+  }
+  var aspectSet = false;
+  videos.forEach(function (v) {
+    function useAspect() {
+      // the clips' own aspect ratio (all clips of a study are rendered alike); 16:9 until known
+      if (aspectSet || v.tagName !== "VIDEO" || !v.videoWidth || !v.videoHeight) return;
+      aspectSet = true;
+      form.style.setProperty("--video-aspect", String(v.videoWidth / v.videoHeight));
+      form.style.setProperty("--video-ratio", v.videoWidth + " / " + v.videoHeight);
+      queueFit();
+    }
+    v.addEventListener("loadedmetadata", useAspect);
+    useAspect();
+  });
+  window.addEventListener("resize", queueFit);
+  window.addEventListener("load", queueFit);
+  fit();
+
+  // ---- "this video does not play": the participant reports it; stored as an event the admin page counts
+  var reportSend = document.getElementById("report-send");
+  if (reportSend) {
+    var reportSlot = document.getElementById("report-slot");
+    Array.prototype.forEach.call(reportSlot.querySelectorAll("option[data-slot]"), function (o) {
+      var k = o.getAttribute("data-slot");
+      var label = document.querySelector(".player[data-slot='" + k + "'] .label");
+      if (label && label.textContent.trim() && label.textContent.trim() !== "Video") o.textContent = label.textContent.trim();
+    });
+    if (reportSlot.options.length === 2) reportSlot.remove(1);   // one video: "every video" says it
+    reportSend.addEventListener("click", function () {
+      var value = reportSlot.value;
+      var slot = value === "all" ? null : Number(value);
+      var state = videos.filter(function (v) { return slot === null || Number(v.getAttribute("data-slot")) === slot; })
+        .map(function (v) {
+          return v.getAttribute("data-slot") + ":ready=" + v.readyState + ",net=" + v.networkState +
+            (v.error ? ",error=" + v.error.code : "");
+        }).join(" ");
+      var medium = slot === null ? null : videos[slot];
+      var report = {id: rid(), kind: "unplayable", slot: slot, t: medium ? medium.currentTime : null,
+                    ms: Date.now(), detail: state.slice(0, 200)};
+      var status = document.getElementById("report-status");
+      status.textContent = "Sending…";
+      // sent at once (not with the next batch) so that the participant learns whether it arrived
+      post(data.events_url, {events: [report]}).then(function (r) {
+        if (r.ok) { status.textContent = "Thank you, the researchers can see your report."; return; }
+        if (r.status >= 500) throw new Error(String(r.status));
+        status.textContent = "The report could not be stored (" + r.status + ").";
+      }).catch(function () {
+        queue.push(report);   // the log is sent again every few seconds
+        status.textContent = "No connection; the report is sent again in a few seconds.";
+      });
+    });
+  }
 
   // ---- answers
   function inputs() { return Array.prototype.slice.call(form.querySelectorAll("input, select, textarea")); }

@@ -168,5 +168,11 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
                                     "motion_seed": motion_seed, "n_words": len(transcript),
                                     "emphasis": [i for i, f in enumerate(flags) if f], "onsets": onsets,
                                     "sentences": texts}
+    for split, ids in meta["splits"].items():  # GENEA 2023's metadata.csv: the speaker of each recording
+        if ids:
+            rows = "".join(f"{i},{speaker},False,,\n" for i in ids)
+            (root / SPLIT_DIRS[split] / "metadata.csv").write_text(
+                "prefix,main-agent_id,main-agent_has_fingers,interloctr_id,interloctr_has_fingers\n" + rows,
+                encoding="utf-8", newline="\n")
     (root / "corpus.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     return meta

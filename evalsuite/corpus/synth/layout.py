@@ -12,7 +12,7 @@ import json
 import pathlib
 from typing import Any
 
-from evalsuite.corpus.types import Corpus, Segment, Stream, Transcript, Word, canonical_split
+from evalsuite.corpus.types import Corpus, Transcript, Word
 from evalsuite.errors import InputError
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "SPLIT_DIRS", "segment_paths", "read_tsv", "format_tsv",
@@ -64,20 +64,15 @@ def read_meta(root: str | pathlib.Path) -> dict[str, Any]:
 
 
 def read_synth_corpus(root: str | pathlib.Path) -> Corpus:
-    """A synthetic-speaker corpus folder as a :class:`Corpus` (to be replaced by
-    ``evalsuite.corpus.load_corpus``). Segment ``meta`` holds ``motion_seed`` and ``emphasis``."""
-    root = pathlib.Path(root)
-    meta = read_meta(root)
-    segments = []
-    for seg_id, info in sorted(meta["segments"].items()):
-        split = canonical_split(info["split"]) or "train"
-        paths = segment_paths(root, split, seg_id)
-        for key in ("wav", "bvh", "tsv"):
-            if not paths[key].is_file():
-                raise InputError(f"segment {seg_id!r}: missing {key} file", path=paths[key])
-        stream = Stream(paths["wav"], read_tsv(paths["tsv"]), paths["bvh"])
-        segments.append(Segment(seg_id, stream, float(info["duration"]), meta.get("speaker"), split,
-                                labels=paths["labels"] if paths["labels"].is_file() else None,
-                                meta={"motion_seed": int(info["motion_seed"]),
-                                      "emphasis": [int(i) for i in info["emphasis"]]}))
-    return Corpus(root, "genea2023", tuple(segments), meta=meta)
+    """A synthetic-speaker corpus folder as a :class:`Corpus`: checks that ``corpus.json`` is the speaker's,
+    then reads the folder with :func:`evalsuite.corpus.load_corpus` (GENEA 2023 layout) and adds each
+    segment's ``motion_seed`` and ``emphasis`` (indices of emphasised words) from ``corpus.json`` to its meta."""
+    import dataclasses
+
+    from evalsuite.corpus.readers import load_corpus
+
+    info = read_meta(root)["segments"]
+    corpus = load_corpus(root, layout="genea2023")
+    return corpus.with_segments([dataclasses.replace(s, meta={**s.meta, "motion_seed": int(info[s.id]["motion_seed"]),
+                                                             "emphasis": [int(i) for i in info[s.id]["emphasis"]]})
+                                 for s in corpus.segments])

@@ -48,8 +48,8 @@ class MotionParams:
     shake_hz: float = 2.5
     shake_cycles: float = 2.0
     breath_hz: tuple[float, float] = (0.2, 0.3)
-    breath_deg: float = 1.5
-    sway_deg: float = 1.5
+    breath_deg: float = 0.8
+    sway_deg: float = 0.8
     sway_hz: tuple[float, float] = (0.04, 0.2)
     offset_s: float = 0.0
     beats: bool = True

@@ -47,15 +47,18 @@ OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-fra
            "representation": "expmap (default: joint rotations, BVH, as the GENEA 2020 BA baseline) or positions "
                              "(hip-centred joint positions, as the IVA'19 paper)",
            "features": "mfcc (default: 26 MFCC, mfcc_kucherenko) or mfcc+prosody (MFCC + pitch and energy)",
-           "width": "units of the dense and GRU layers (default 128; paper 256)",
+           "width": "units of the dense and GRU layers (default 64; paper 256)",
            "code_dim": "aud2repr2pose: size of the motion representation (default 40, as GENEA 2020 BA)",
-           "epochs": "epochs of the speech network (default 60)", "dae_epochs": "autoencoder epochs (default 20)",
-           "batch_size": "windows or chunks per batch (default 64 chunks / 2056 windows)",
+           "epochs": "most epochs of the speech network (default 300)", "dae_epochs": "autoencoder epochs (default 20)",
+           "patience": "stop after this many epochs without a better validation loss (default 25); the best "
+                       "validation epoch's weights are kept",
+           "batch_size": "windows or chunks per batch (default 16 chunks / 2056 windows)",
            "learning_rate": "Adam (default 1e-3, the paper's)", "threads": "torch threads (default 1)"}
 DEVIATIONS = ("The speech network runs in the sequence-level form by default (one bidirectional GRU pass per "
               "100-frame chunk instead of one 61-frame window per output frame: ~60x less computation on a CPU); "
               "form=windowed is the paper's.",
-              "Layers are 128 units wide by default (paper: 256).",
+              "Layers are 64 units wide by default (paper: 256); the best validation epoch's weights are kept "
+              "(early stopping), where the paper trained a fixed number of epochs.",
               "Motion: joint rotations (exponential maps) of the GENEA 2020 upper body of the corpus's skeleton by "
               "default, or hip-centred joint positions; the paper used 64 joint positions + velocities of a "
               "Japanese corpus.")
@@ -75,9 +78,10 @@ class _Aud2(Generator):
                 raise GeneratorError(f"{name} must be one of {', '.join(allowed)}, got {value!r}", field=name)
         windowed = form == "windowed"
         return {"form": form, "representation": rep, "features": feats,
-                "width": int(self.option("width", 128)), "code_dim": int(self.option("code_dim", 40)),
-                "epochs": int(self.option("epochs", 60)), "dae_epochs": int(self.option("dae_epochs", 20)),
-                "batch_size": int(self.option("batch_size", 2056 if windowed else 64)),
+                "width": int(self.option("width", 64)), "code_dim": int(self.option("code_dim", 40)),
+                "epochs": int(self.option("epochs", 300)), "dae_epochs": int(self.option("dae_epochs", 20)),
+                "patience": int(self.option("patience", 25)),
+                "batch_size": int(self.option("batch_size", 2056 if windowed else 16)),
                 "learning_rate": float(self.option("learning_rate", 1e-3)), "threads": int(self.option("threads", 1))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
@@ -100,7 +104,8 @@ class _Aud2(Generator):
                              code_dim=st["code_dim"], dae_epochs=st["dae_epochs"], epochs=st["epochs"],
                              batch_size=st["batch_size"], learning_rate=st["learning_rate"], seed=seed,
                              val_speech=vspeech, val_poses=[a.poses for a in va],
-                             budget_seconds=budget_seconds(budget_minutes), on_epoch=progress)
+                             budget_seconds=budget_seconds(budget_minutes), patience=st["patience"],
+                             on_epoch=progress)
         rep.save(out_dir)
         sha = save_state(out_dir, "speech_net.pt", model.speech_net)
         if model.dae is not None:

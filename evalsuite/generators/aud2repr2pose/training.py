@@ -15,6 +15,7 @@ import torch
 from torch import nn
 
 from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
+from evalsuite.generators.early_stopping import BestWeights
 
 __all__ = ["MaxAbsScaler", "Standardiser", "TrainedSystem", "train_dae", "train_system", "generate",
            "SYSTEMS"]
@@ -118,9 +119,11 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
                  config: dict | None = None, code_dim: int = 40, dae_epochs: int = 20, epochs: int = 120,
                  batch_size: int = 2056, learning_rate: float = 1e-3, chunk: int = 100, seed: int = 0,
                  val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
-                 budget_seconds: float | None = None,
+                 budget_seconds: float | None = None, patience: int | None = None,
                  on_epoch: Callable[[dict], None] | None = None) -> TrainedSystem:
-    """Train one of ``SYSTEMS`` on segments; deterministic for a seed on one machine."""
+    """Train one of ``SYSTEMS`` on segments; deterministic for a seed on one machine. With validation data the
+    weights of the best validation epoch are kept (:class:`~evalsuite.generators.early_stopping.BestWeights`;
+    ``patience``: stop after that many epochs without improvement)."""
     if system not in SYSTEMS:
         raise ValueError(f"unknown system {system!r}; expected one of {', '.join(SYSTEMS)}")
     uses_repr, overrides = SYSTEMS[system]
@@ -163,6 +166,7 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
                 vy = [dae.encode(torch.from_numpy(y)).numpy() for y in vy]
         val = dataset([speech_norm(s) for s in val_speech], vy)
     history: list[dict] = []
+    best = BestWeights(net, patience)
     for epoch in range(epochs):
         net.train()
         total = 0.0
@@ -181,11 +185,15 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             with torch.no_grad():
                 record["val_loss"] = float(nn.functional.mse_loss(net(val[0]), val[1]))
         history.append(record)
+        stop = best.update(record)
         if on_epoch is not None:
             on_epoch(record)
+        if stop:
+            break
         if budget_seconds is not None and time.perf_counter() - start > budget_seconds:
             record["stopped"] = "time budget spent"
             break
+    best.restore()
     net.eval()
     return TrainedSystem(system, net, speech_norm, pose_norm, dae, history)
 

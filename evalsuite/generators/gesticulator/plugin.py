@@ -61,6 +61,8 @@ class Gesticulator(Generator):
                 "film": "true (default); false: concatenation instead of FiLM (ablation)",
                 "size": "cpu (default) or paper (124 / 612, 256 / 512 units)",
                 "epochs": "epochs of the compressed schedule (default 40)", "threads": "torch threads (default 1)",
+                "patience": "stop after this many epochs without a better validation loss (default none); the "
+                            "best validation epoch's weights are kept",
                 "batch_size": "sequences per batch (default 64)", "learning_rate": "Adam (default 1e-3; paper 1e-4)",
                 "zero_audio": "at generation: replace the audio features by their training mean (shows what the "
                               "text path alone does)"},
@@ -84,6 +86,7 @@ class Gesticulator(Generator):
         return {"inputs": inputs, "size": size, "words": str(self.option("words", "minilm")),
                 "autoregressive": bool(self.option("autoregressive", True)), "film": bool(self.option("film", True)),
                 "epochs": int(self.option("epochs", 40)), "threads": int(self.option("threads", 1)),
+                "patience": self.option("patience"),
                 "batch_size": int(self.option("batch_size", 64)),
                 "learning_rate": float(self.option("learning_rate", 1e-3))}
 
@@ -109,7 +112,7 @@ class Gesticulator(Generator):
         model = train_gesticulator([a.speech for a in tr], [a.poses for a in tr], config, schedule,
                                    seed=seed, val_speech=[a.speech for a in va],
                                    val_poses=[a.poses for a in va], budget_seconds=budget_seconds(budget_minutes),
-                                   on_epoch=progress)
+                                   patience=st["patience"], on_epoch=progress)
         rep.save(out_dir)
         sha = save_state(out_dir, "gesticulator.pt", model.net)
         np.savez(out_dir / "normalisers.npz", speech_mean=model.speech_norm.mean, speech_std=model.speech_norm.std,

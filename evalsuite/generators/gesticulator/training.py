@@ -21,6 +21,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
 
 __all__ = ["TrainSchedule", "Normaliser", "TrainedGesticulator", "train_gesticulator", "generate_poses",
@@ -136,12 +137,13 @@ def _loss(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
 def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], config: GesticulatorConfig,
                        schedule: TrainSchedule = TrainSchedule(), *, seed: int = 0,
                        val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
-                       budget_seconds: float | None = None,
+                       budget_seconds: float | None = None, patience: int | None = None,
                        on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
     """Train on segments of (speech (T, A+X), poses (T, D)); deterministic for a seed on one machine.
 
     With ``budget_seconds`` the schedule is compressed so that its stages still run in order: training stops
-    when the budget is spent, and the history says so."""
+    when the budget is spent, and the history says so. With validation data the weights of the best validation
+    epoch are kept (``patience``: stop after that many epochs without improvement)."""
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     speech_norm, pose_norm = Normaliser.fit(speech), Normaliser.fit(poses)
@@ -156,6 +158,7 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
     net = GesticulatorNet(config)
     opt = torch.optim.Adam(net.parameters(), lr=schedule.learning_rate)
     history: list[dict] = []
+    best = BestWeights(net, patience)
     start = time.perf_counter()
     for epoch in range(schedule.epochs):
         autoregressive, period = schedule.stage(epoch)
@@ -181,11 +184,15 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
                 vpred = _rollout(net, val[0], val[1], config.autoregressive, 1)
                 record["val_loss"] = float(_loss(vpred, val[1][:, config.past:schedule.sequence - config.future]))
         history.append(record)
+        stop = best.update(record)
         if on_epoch is not None:
             on_epoch(record)
+        if stop:
+            break
         if budget_seconds is not None and time.perf_counter() - start > budget_seconds:
             record["stopped"] = "time budget spent"
             break
+    best.restore()
     net.eval()
     return TrainedGesticulator(net, speech_norm, pose_norm, history)
 

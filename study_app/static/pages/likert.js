@@ -4,7 +4,7 @@
   window.EvalsuitePages.register("likert", {
   collect: function (ctx) {
     var ratings = {};
-    ctx.form.querySelectorAll("tr[data-statement]").forEach(function (tr) {
+    ctx.form.querySelectorAll("[data-statement]").forEach(function (tr) {
       var c = tr.querySelector("input:checked");
       ratings[tr.getAttribute("data-statement")] = c ? Number(c.value) : null;
     });

@@ -11,4 +11,32 @@
     return "";
   }
   });
+
+  // HEMVIP display: one player shows the video whose button was pressed last (or that plays); its
+  // button and slider are highlighted. Registered before study.js's own button handlers, so the chosen
+  // video is visible before it starts.
+  var board = document.querySelector(".hemvip");
+  if (!board) return;
+  var stage = board.querySelectorAll(".hv-stage video[data-slot]");
+  function select(slot) {
+    Array.prototype.forEach.call(stage, function (v) { v.hidden = Number(v.getAttribute("data-slot")) !== slot; });
+    board.querySelectorAll(".hv-head, .hv-col").forEach(function (el) {
+      el.classList.toggle("selected", Number(el.getAttribute("data-slot")) === slot);
+    });
+  }
+  board.querySelectorAll("button.play[data-slot]").forEach(function (b) {
+    b.addEventListener("click", function () { select(Number(b.getAttribute("data-slot"))); });
+  });
+  Array.prototype.forEach.call(stage, function (v) {
+    v.addEventListener("play", function () { select(Number(v.getAttribute("data-slot"))); });
+  });
+  board.querySelectorAll("input[type=range][data-slot]").forEach(function (r) {
+    // rating a video shows it (its last frame), so the participant sees what they rate
+    r.addEventListener("focus", function () {
+      var slot = Number(r.getAttribute("data-slot"));
+      var playing = Array.prototype.some.call(stage, function (v) { return !v.paused && !v.ended; });
+      if (!playing) select(slot);
+    });
+  });
+  select(0);
 })();
