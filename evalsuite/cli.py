@@ -29,6 +29,7 @@ COMMANDS = {
     "train": "evalsuite.generators.cli:train_command",
     "corpus": "evalsuite.corpus.cli:corpus",
     "features": "evalsuite.features.cli:features",
+    "validate-metrics": "evalsuite.validity.cli:validate_metrics",
     "correlate": "evalsuite.analysis.correlate_cli:correlate",
 }
 

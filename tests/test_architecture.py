@@ -16,8 +16,8 @@ LAYERS = [
     {"evalsuite.metrics", "evalsuite.features", "evalsuite.corpus"},
     {"evalsuite.learned", "evalsuite.analysis", "renderers"},
     {"evalsuite.generators", "study_app"},
-    {"evalsuite.cli", "evalsuite.demo", "evalsuite.pipeline", "evalsuite.score_command", "evalsuite.__main__",
-     "evalsuite"},
+    {"evalsuite.cli", "evalsuite.demo", "evalsuite.pipeline", "evalsuite.score_command", "evalsuite.validity",
+     "evalsuite.__main__", "evalsuite"},
 ]
 
 
