@@ -34,6 +34,9 @@ class AnalysisOptions:
     zero_method: str = "wilcox"
     n_boot: int = 1000
     seed: int = 42
+    elo_prior: float = 0.1
+    bootstrap_sampler: str = "multinomial"
+    preset: str | None = None
     mismatch_suffix: str = ":mismatched"
     mismatch_tie_policy: str = "split"
     study: str | None = None
@@ -110,7 +113,8 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
         mism |= pw["condition_a"] == pw["condition_b"] + opt.mismatch_suffix
         ranked = pw[~mism] if opt.mismatch_suffix else pw
         if not ranked.empty:
-            T["elo"] = elo_table(ranked, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha)
+            T["elo"] = elo_table(ranked, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha,
+                                 prior=opt.elo_prior, sampler=opt.bootstrap_sampler)
             res.notes += _notes(T["elo"].drop_duplicates(["question", "note"]), "ranking", ["question"])
     mu_design = design[design["page_type"] == "mushra"]
     mu = data[data["page_type"] == "mushra"]
@@ -225,7 +229,9 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
         if opt.figures:
             for q in sorted(T["elo"]["question"].unique()):
                 if np.isfinite(T["elo"].loc[T["elo"]["question"] == q, "elo"].astype(float)).any():
-                    parts.append(add(report.fig_elo(T["elo"], q), f"elo_{_safe(q)}", f"Elo with 95% CIs: {q}"))
+                    parts.append(add(report.fig_elo(T["elo"], q, opt.elo_prior, 100 * (1 - opt.alpha)),
+                                     f"elo_{_safe(q)}", f"Elo ({report.elo_method(opt.elo_prior)}) with "
+                                     f"{100 * (1 - opt.alpha):g}% CIs: {q}"))
         sections.append(("Ranking (Bradley-Terry / Elo)", parts))
     if "ratings" in T:
         parts = [report.html_table(T["ratings"]), "<p>Pairwise Wilcoxon signed-rank tests:</p>",

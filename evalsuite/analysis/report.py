@@ -168,8 +168,15 @@ def fig_significance(matrix: pd.DataFrame, question: str):
     return fig
 
 
-def fig_elo(elo: pd.DataFrame, question: str):
-    """Elo (Bradley-Terry) per condition with bootstrap 95 % CIs."""
+def elo_method(prior: float) -> str:
+    """What the Elo column is, in words, for figure labels and the report."""
+    if prior == 0:
+        return "Bradley-Terry MLE"
+    return f"Bradley-Terry, penalised by {prior:g} virtual ties per pair"
+
+
+def fig_elo(elo: pd.DataFrame, question: str, prior: float = 0.1, level: float = 95):
+    """Elo (Bradley-Terry) per condition with bootstrap CIs; the label says which fit."""
     sub = elo[(elo["question"] == question) & np.isfinite(elo["elo"].astype(float))]
     sub = sub.sort_values("elo")
     fig, ax = plt.subplots(figsize=(7, 0.45 * len(sub) + 1.5))
@@ -180,7 +187,7 @@ def fig_elo(elo: pd.DataFrame, question: str):
     ax.errorbar(sub["elo"], y, xerr=err, fmt="o", capsize=4, color="#4c72b0")
     ax.set_yticks(y, sub["condition"])
     ax.axvline(1000, color="0.5", lw=0.8, ls="--")
-    ax.set_xlabel("Elo (Bradley-Terry MLE, 95% participant-bootstrap CI)")
+    ax.set_xlabel(f"Elo ({elo_method(prior)}; {level:g}% participant-bootstrap CI)")
     ax.set_title(f"Ranking: {question}")
     fig.tight_layout()
     return fig
