@@ -152,18 +152,32 @@ def fig_ratings(mu: pd.DataFrame, question: str):
     return fig
 
 
+SIGNIFICANCE_LEGEND = (("#4dac26", "row rated significantly higher than column"),
+                       ("#d6604d", "row rated significantly lower than column"),
+                       ("#bbbbbb", "not significant"),
+                       ("white", "no test (same condition, or never on the same page)"))
+
+
 def fig_significance(matrix: pd.DataFrame, question: str):
     """Significance matrix: green = row rated significantly higher than column, red = lower,
-    grey = not significant, white = no test."""
+    grey = not significant, white = no test; all four in the legend."""
     from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
 
     m = matrix.to_numpy(float)
-    fig, ax = plt.subplots(figsize=(max(4, 0.55 * len(matrix) + 2.5), max(3.5, 0.55 * len(matrix) + 1.8)))
+    n = len(matrix)
+    fig, ax = plt.subplots(figsize=(max(5.5, 0.55 * n + 2.5), max(4.5, 0.55 * n + 2.8)))
     cmap = ListedColormap(["#d6604d", "#bbbbbb", "#4dac26"]).with_extremes(bad="white")
     ax.imshow(np.ma.masked_invalid(m), cmap=cmap, vmin=-1, vmax=1)
-    ax.set_xticks(range(len(matrix)), matrix.columns, rotation=45, ha="right")
-    ax.set_yticks(range(len(matrix)), matrix.index)
-    ax.set_title(f"Wilcoxon + Holm: {question}\n(green: row > column, red: row < column)", fontsize=10)
+    ax.set_xticks(range(n), matrix.columns, rotation=45, ha="right")
+    ax.set_yticks(range(n), matrix.index)
+    ax.set_xticks(np.arange(-0.5, n, 1), minor=True)
+    ax.set_yticks(np.arange(-0.5, n, 1), minor=True)
+    ax.grid(which="minor", color="0.6", lw=0.5)
+    ax.tick_params(which="minor", length=0)
+    ax.set_title(f"Wilcoxon signed-rank + Holm: {question}", fontsize=10)
+    ax.legend(handles=[Patch(facecolor=c, edgecolor="0.4", label=lab) for c, lab in SIGNIFICANCE_LEGEND],
+              loc="upper center", bbox_to_anchor=(0.5, -0.22), fontsize=8, frameon=False, ncol=1)
     fig.tight_layout()
     return fig
 
