@@ -9,6 +9,7 @@ the offending value, so a researcher can fix the CSV without reading a traceback
 from __future__ import annotations
 
 import csv
+import io
 import os
 import pathlib
 from typing import NoReturn
@@ -16,6 +17,7 @@ from typing import NoReturn
 import numpy as np
 import pandas as pd
 
+from evalsuite.analysis import validate
 from evalsuite.contracts import results as results_contract
 from evalsuite.errors import InputError
 
@@ -44,7 +46,9 @@ def _read_table(path) -> pd.DataFrame:
         _fail("file not found (expected a results.csv or battles CSV)", path)
     records, lines = [], []
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
+        text = path.read_bytes().decode("utf-8-sig")
+        validate.check_control_characters(text, path)
+        with io.StringIO(text, newline="") as fh:
             reader = csv.reader(fh, strict=True)
             header = next(reader, None)
             if not header:
@@ -119,25 +123,6 @@ def _check_nonempty(df, mask, col, path, what):
         _fail(f"empty value; {what}", path, line=int(row["line"]), field=col)
 
 
-def _check_int(df, mask, col, path, lo=None, hi=None, allow_empty=False):
-    vals = df.loc[mask, col]
-    if allow_empty:
-        vals = vals[vals != ""]
-    num = pd.to_numeric(vals, errors="coerce")
-    ok = num.notna() & (num == np.floor(num))
-    if lo is not None:
-        ok &= num >= lo
-    if hi is not None:
-        ok &= num <= hi
-    if not ok.all():
-        idx = ok[~ok].index[0]
-        rng = "an integer" + (f" >= {lo}" if lo is not None and hi is None else "")
-        if lo is not None and hi is not None:
-            rng = f"an integer in {lo}..{hi}"
-        _fail(f"invalid value {df.at[idx, col]!r}; expected {rng}", path,
-              line=int(df.at[idx, "line"]), field=col)
-
-
 def read_results(path, study: str | None = None) -> pd.DataFrame:
     """Read and validate a ``results.csv`` (format: ``docs/results_format.md``).
 
@@ -186,8 +171,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
     for flag in ("is_training", "is_attention_check"):
         _check_allowed(df, all_rows, flag, ("0", "1"), path)
     _check_allowed(df, all_rows, "attention_passed", ("0", "1", ""), path)
-    _check_int(df, all_rows & (df["trial"] != ""), "trial", path, lo=0)
-    _check_int(df, all_rows, "rt_ms", path, lo=0, allow_empty=True)
+    validate.normalise_times(df, path)
 
     # One session belongs to one participant: otherwise exclusions per participant break.
     owners = df.groupby("session")["participant"].nunique()
@@ -228,6 +212,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
               line=int(row["line"]), field="strength")
     _check_nonempty(df, mu | lk, "condition", path, "rating rows (mushra, likert) name the rated condition")
     _check_allowed(df, mu, "role", ROLES, path)
+    validate.check_numbers(df, path, mu, lk)
     value = pd.to_numeric(df["answer"].where(mu | lk), errors="coerce")
     bad_mu = mu & ~((value >= 0) & (value <= 100))
     if bad_mu.any():
@@ -239,6 +224,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
         row = df[bad_lk].iloc[0]
         _fail(f"invalid Likert answer {row['answer']!r}; expected an integer 1..k", path,
               line=int(row["line"]), field="answer")
+    validate.check_likert_points(df, lk, value, path)
     _check_nonempty(df, lk, "scale", path, "likert rows name the scale the statement belongs to")
     # A statement belongs to one scale; a statement listed under two scales is a typo.
     lk_rows = df[lk]
@@ -252,11 +238,14 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
 
     df = df.copy()
     df["value"] = value.where(mu | lk)
+    df, excluded = validate.duplicate_rows(df, path)
     df["is_training"] = df["is_training"].astype(int)
     df["is_attention_check"] = df["is_attention_check"].astype(int)
     df.attrs["source"] = os.fspath(path)
     df.attrs["format"] = "results"
     df.attrs["study"] = studies[0] if study is None else study
+    # (line, reason, detail) of rows excluded by the reader (plain tuples: attrs are copied along)
+    df.attrs["rows_excluded"] = tuple(excluded.itertuples(index=False, name=None))
     return df.reset_index(drop=True)
 
 

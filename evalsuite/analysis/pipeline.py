@@ -72,6 +72,7 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
     opt = options or AnalysisOptions()
     out_dir = pathlib.Path(out_dir)
     raw = read_any(path, study=opt.study)
+    rows_excluded = pd.DataFrame(list(raw.attrs.get("rows_excluded", ())), columns=["line", "reason", "detail"])
     out_dir.mkdir(parents=True, exist_ok=True)
     salt, reveal_salt = blinding.resolve(out_dir, blind, reveal)
     names = blinding.all_conditions(raw)
@@ -90,6 +91,11 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
          f"{s['rows_analysed']} judgements")
     T = res.tables
     T["exclusions"] = excl.table
+    T["rows_excluded"] = rows_excluded
+    row_counts = rows_excluded["reason"].value_counts().to_dict()
+    if row_counts:
+        echo("Rows excluded before the analysis: " + ", ".join(f"{n} {r}" for r, n in sorted(row_counts.items()))
+             + " (rows_excluded.csv)")
     items: list[tuple[str, str, str, str]] = []
 
     # The design = every judgement row of the file (any session), so a comparison emptied
@@ -154,7 +160,8 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
     res.report_path.write_text(report.html_report(title, sections), encoding="utf-8")
     summary = {"input": str(path), "study": raw.attrs.get("study"), "format": raw.attrs.get("format"),
                "blinded": res.blinded, "options": asdict(opt),
-               "exclusions": {k: v for k, v in excl.summary.items()}, "notes": res.notes,
+               "exclusions": {k: v for k, v in excl.summary.items()}, "rows_excluded": row_counts,
+               "notes": res.notes,
                "note_details": res.note_details}
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
     if reveal_salt is not None:
@@ -194,6 +201,10 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
           f"({s['participants_included']} participants, {s['rows_analysed']} judgements). "
           f"Removed rows: {s['training_rows_removed']} training, "
           f"{s['attention_check_rows_removed']} attention-check trials.</p>"]
+    dropped = T["rows_excluded"]
+    if not dropped.empty:
+        ex.append("<p>Rows excluded by the reader before any statistic (each listed in rows_excluded.csv):</p>")
+        ex.append(report.html_table(dropped["reason"].value_counts().rename_axis("reason").reset_index(name="rows")))
     if s["reasons"]:
         ex.append(report.html_table(pd.DataFrame(sorted(s["reasons"].items()), columns=["reason", "sessions"])))
     ex.append(tbl(T["exclusions"]) if not T["exclusions"].empty else "<p>Nobody was excluded.</p>")

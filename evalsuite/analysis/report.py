@@ -23,7 +23,7 @@ DASH = "–"
 _P_COLUMNS = {"p_value", "p_holm", "p_bonferroni"}
 _INT_LIKE = {"n", "k", "n_a", "n_b", "n_tie", "n_a_strong", "n_b_strong", "n_participants", "levels",
              "n_pages", "n_zero", "n_items", "n_units", "n_judgements", "n_matched", "n_mismatched",
-             "df_num", "df_den", "sessions"}
+             "df_num", "df_den", "sessions", "rows", "line"}
 
 
 def _fmt(col: str, v, dash: str = DASH) -> str:
