@@ -128,3 +128,21 @@ def test_cli_error_is_one_line_naming_file_line_and_column(tmp_path):
     assert r.exit_code != 0
     msg = [ln for ln in r.output.splitlines() if ln.strip()]
     assert len(msg) == 1 and "results.csv:2" in msg[0] and "rt_ms" in msg[0] and "Traceback" not in r.output
+
+
+def test_fast_reader_keeps_file_lines_with_quotes_blank_lines_and_crlf(tmp_path):
+    header = HEADER + ",comment"
+    lines = [GOOD[0] + ',"a, b"', "", GOOD[1] + ',"say ""hi"""', "   ", GOOD[2] + ",plain"]
+    df = read_results(write(tmp_path, lines, header=header))
+    assert list(df["line"]) == [2, 4, 6]
+    assert list(df["comment"]) == ["a, b", 'say "hi"', "plain"]
+    multi = [GOOD[0] + ',"two\nlines"', GOOD[1] + ",x"]          # a quoted newline: the record-by-record path
+    df = read_results(write(tmp_path, multi, header=header))
+    assert list(df["line"]) == [3, 4]
+    crlf = tmp_path / "crlf.csv"
+    crlf.write_bytes(("\r\n".join([HEADER] + GOOD[:2]) + "\r\n").encode())
+    df = read_results(crlf)
+    assert list(df["line"]) == [2, 3] and df.loc[1, "answered_at"] == ""
+    short = [GOOD[0], ",".join(GOOD[1].split(",")[:-1])]
+    e = err(tmp_path, short)
+    assert e.line == 3 and "24 fields but the header has 25" in str(e)

@@ -9,7 +9,6 @@ the offending value, so a researcher can fix the CSV without reading a traceback
 from __future__ import annotations
 
 import csv
-import io
 import os
 import pathlib
 from typing import NoReturn
@@ -17,7 +16,7 @@ from typing import NoReturn
 import numpy as np
 import pandas as pd
 
-from evalsuite.analysis import validate
+from evalsuite.analysis import csvtext, validate
 from evalsuite.contracts import results as results_contract
 from evalsuite.errors import InputError
 
@@ -44,43 +43,7 @@ def _read_table(path) -> pd.DataFrame:
     path = pathlib.Path(path)
     if not path.is_file():
         _fail("file not found (expected a results.csv or battles CSV)", path)
-    records, lines = [], []
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-        validate.check_control_characters(text, path)
-        with io.StringIO(text, newline="") as fh:
-            reader = csv.reader(fh, strict=True)
-            header = next(reader, None)
-            if not header:
-                _fail("empty file: expected a header row and at least one data row", path)
-            header = [c.strip() for c in header]
-            for row in reader:
-                if not row or (len(row) == 1 and not row[0].strip()):
-                    continue  # blank line
-                if len(row) != len(header):
-                    _fail(f"row has {len(row)} fields but the header has {len(header)}; "
-                          "not a well-formed CSV (unquoted comma?)", path, line=reader.line_num)
-                records.append(row)
-                # reader.line_num is the file line where this record ended (quoted newlines ok).
-                lines.append(reader.line_num)
-    except UnicodeDecodeError as exc:
-        _fail(f"not UTF-8 text ({exc.reason} at byte {exc.start})", path)
-    except csv.Error as exc:
-        _fail(f"not a well-formed CSV: {exc}", path)
-    dupes = sorted({c for c in header if header.count(c) > 1})
-    if dupes:
-        _fail(f"duplicate column(s) in the header: {', '.join(dupes)}", path, line=1)
-    if not records:
-        _fail("no data rows after the header", path)
-    # Everything as text: the validation decides what each column must hold (and "NA",
-    # a common condition name, stays a string).
-    df = pd.DataFrame(records, columns=header, dtype=str)
-    for col in df.columns:
-        df[col] = df[col].str.strip()
-    # Unknown extra columns are ignored; one called "line" would clash with ours.
-    df = df.drop(columns=[c for c in ("line", "value") if c in df.columns])
-    df.insert(0, "line", np.asarray(lines, dtype=int))
-    return df
+    return csvtext.read_cells(path)
 
 
 def detect_format(path) -> str:
