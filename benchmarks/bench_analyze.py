@@ -73,7 +73,8 @@ def main(argv=None):
         summary = json.loads((out / "summary.json").read_text())
         tests = pd.read_csv(out / "mismatch_barnard.csv")["test"].value_counts().to_dict() \
             if (out / "mismatch_barnard.csv").is_file() else {}
-        rows = sum(1 for _ in open(path, encoding="utf-8")) - 1
+        with open(path, encoding="utf-8") as fh:
+            rows = sum(1 for _ in fh) - 1
         print(f"{rows:>10,} {summary['exclusions']['sessions_total']:>9,} {path.stat().st_size / 1e6:>8.1f} "
               f"{dt:>10.1f}  {tests}  (generation {gen:.1f} s)", flush=True)
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, pandas {pd.__version__}, "

@@ -9,8 +9,14 @@ from scipy import stats
 from statsmodels.stats.anova import AnovaRM
 
 from evalsuite.analysis.likert import rm_anova
-from evalsuite.analysis.pairwise import (BARNARD_ASYMPTOTIC, BARNARD_EXACT, BARNARD_EXACT_MAX_CELLS, barnard_p,
-                                         barnard_test, mismatch_tables)
+from evalsuite.analysis.pairwise import (
+    BARNARD_ASYMPTOTIC,
+    BARNARD_EXACT,
+    BARNARD_EXACT_MAX_CELLS,
+    barnard_p,
+    barnard_test,
+    mismatch_tables,
+)
 
 
 def test_barnard_small_tables_are_exact():
