@@ -127,3 +127,10 @@ def test_collapse_keeps_single_notes_and_ranges_varying_numbers():
     assert lines[1] == "ranking q: a single participant: no bootstrap CI"
     assert lines[0].startswith("Wilcoxon, 3 times: N zero difference(s) dropped (zero_method=wilcox) (N = 3 to 12)")
     assert "ratings_pairwise.csv" in lines[0]
+
+
+def test_collapse_keeps_numbers_with_thousands_separators():
+    items = [("Barnard", f"q / A / B{i}", f"{n} and {n} judgements: above the exact test's limit (250,000 tables)",
+              "mismatch_barnard") for i, n in enumerate((24314, 1200))]
+    (line,) = collapse_notes(items)
+    assert "(250,000 tables)" in line and "N = 1200 to 24314" in line

@@ -23,7 +23,7 @@ IDENTIFIERS = ("question", "scale", "test", "condition", "condition_a", "conditi
                "condition_2", "role")
 DECISIVE = ("better", "significant", "p_holm", "p_bonferroni", "elo", "pref_a", "pref_matched", "median",
             "ci_low", "ci_high", "median_diff", "pref_1", "pref_2", "mean", "p_value")
-_NUM = re.compile(r"\d+(?:\.\d+)?")
+_NUM = re.compile(r"\d+(?:,\d{3})*(?:\.\d+)?")
 SHOW_SUBJECTS = 3
 
 
@@ -48,13 +48,14 @@ def collapse_notes(items: list[tuple[str, str, str, str]]) -> list[str]:
             subject, note = members[0]
             out.append(f"{what} {subject}: {note}" if subject else f"{what}: {note}")
             continue
-        numbers = [[float(x) for x in _NUM.findall(note)] for _, note in members]
+        tokens = [_NUM.findall(note) for _, note in members]
+        numbers = [[float(x.replace(",", "")) for x in toks] for toks in tokens]
         parts = skeleton.split("#")
         text, ranges = parts[0], []
         for k, piece in enumerate(parts[1:]):
             vals = [nums[k] for nums in numbers]
             if min(vals) == max(vals):
-                text += _num(vals[0])
+                text += tokens[0][k]
             else:
                 text += "N" if not ranges else f"N{len(ranges) + 1}"
                 ranges.append(f"{'N' if not ranges else f'N{len(ranges) + 1}'} = {_num(min(vals))} to "

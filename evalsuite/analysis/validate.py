@@ -64,9 +64,11 @@ def check_control_characters(text: str, path) -> None:
 def check_spelling(df: pd.DataFrame, mask, col: str, pattern: str, path, expected: str) -> None:
     """Refuse values of ``col`` (rows in ``mask``, non-empty) that do not match ``pattern``."""
     vals = df.loc[mask, col]
-    vals = vals[vals != ""]
-    bad = ~vals.str.fullmatch(pattern)
-    if bad.any():
+    uniq = pd.unique(vals)                            # each distinct spelling checked once
+    rx = re.compile(pattern)
+    wrong = {u for u in uniq if u != "" and not rx.fullmatch(u)}
+    if wrong:
+        bad = vals.isin(wrong)
         idx = bad[bad].index[0]
         _fail(f"invalid value {df.at[idx, col]!r}; expected {expected}", path, line=int(df.at[idx, "line"]),
               field=col)
@@ -129,8 +131,10 @@ def normalise_times(df: pd.DataFrame, path) -> None:
             first = df.index[vals == bad][0]
             _fail(f"invalid time {bad!r}; expected an ISO 8601 time such as 2026-03-02T09:00:00Z (UTC when "
                   "no offset is given) or an empty cell", path, line=int(df.at[first, "line"]), field=col)
-        canon = dict(zip(uniq, parsed.dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")))
-        df[col] = vals.map(lambda v, c=canon: c.get(v, v))
+        stamps = np.datetime_as_string(parsed.dt.tz_localize(None).to_numpy("datetime64[us]"), unit="us")
+        canon = dict(zip(uniq, np.char.add(stamps, "Z").tolist()))
+        canon[""] = ""
+        df[col] = vals.map(canon)
 
 
 def duplicate_rows(df: pd.DataFrame, path) -> tuple[pd.DataFrame, pd.DataFrame]:
