@@ -134,3 +134,12 @@ def test_collapse_keeps_numbers_with_thousands_separators():
               "mismatch_barnard") for i, n in enumerate((24314, 1200))]
     (line,) = collapse_notes(items)
     assert "(250,000 tables)" in line and "N = 1200 to 24314" in line
+
+
+def test_long_tables_are_cut_in_the_report_with_a_pointer_to_the_csv():
+    from evalsuite.analysis.report import HTML_MAX_ROWS, html_table
+
+    df = pd.DataFrame({"participant": [f"P{i}" for i in range(HTML_MAX_ROWS + 100)], "reason": "x"})
+    out = html_table(df, "exclusions")
+    assert out.count("<tr>") == HTML_MAX_ROWS               # the first rows (the header row is "<tr style=...")
+    assert "... and 100 more rows (all in exclusions.csv)" in out

@@ -184,8 +184,10 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
         figs.append((p, caption))
         return report.html_figure(p, caption)
 
+    names = {id(t): n for n, t in T.items()}
+
     def tbl(df):
-        return report.html_table(display_order(df))
+        return report.html_table(display_order(df), names.get(id(df)))
 
     s = res.exclusions.summary
     settings = settings_rows(opt, raw, T, f"{pathlib.Path(path).name} ({raw.attrs.get('format')})")

@@ -128,14 +128,22 @@ def fig_preferences(table: pd.DataFrame, question: str, tie_policy: str):
     return fig
 
 
+VIOLIN_MAX = 20_000
+HTML_MAX_ROWS = 500
+
+
 def fig_ratings(mu: pd.DataFrame, question: str):
-    """Violin + box plot of 0-100 ratings per condition, sorted by median; mean as a dot."""
+    """Violin + box plot of 0-100 ratings per condition, sorted by median; mean as a dot. Box, median
+    and mean use every rating; the violin's density estimate uses at most :data:`VIOLIN_MAX` of them
+    per condition (a seeded random subsample: its outline does not change visibly, its cost does)."""
     sub = mu[mu["question"] == question]
     order = sub.groupby("condition")["value"].median().sort_values(ascending=False).index.tolist()
     data = [sub.loc[sub["condition"] == c, "value"].to_numpy(float) for c in order]
     fig, ax = plt.subplots(figsize=(max(5, 0.9 * len(order) + 2), 4.5))
     pos = np.arange(1, len(order) + 1)
+    rng = np.random.default_rng(0)   # the density outline of a large study from a seeded subsample
     vio = [d if d.size > 1 else np.r_[d, d + 1e-9] for d in data]
+    vio = [rng.choice(d, VIOLIN_MAX, replace=False) if d.size > VIOLIN_MAX else d for d in vio]
     parts = ax.violinplot(vio, positions=pos, showextrema=False, widths=0.85)
     bodies: Any = parts["bodies"]
     for b in bodies:
@@ -253,11 +261,18 @@ figcaption{font-size:13px;color:#555}.scroll{overflow-x:auto}
 """
 
 
-def html_table(df: pd.DataFrame) -> str:
+def html_table(df: pd.DataFrame, name: str | None = None) -> str:
+    """A report table; more than :data:`HTML_MAX_ROWS` rows are cut there, with a line saying how
+    many more are in the CSV file (``name``)."""
     if df is None or df.empty:
         return "<p><em>(no rows)</em></p>"
+    more = ""
+    if len(df) > HTML_MAX_ROWS:
+        where = f" (all in {name}.csv)" if name else ""
+        more = f"<p><em>... and {len(df) - HTML_MAX_ROWS} more rows{where}</em></p>"
+        df = df.head(HTML_MAX_ROWS)
     return ('<div class="scroll">' + display_frame(df).to_html(index=False, escape=True, border=0)
-            + "</div>")
+            + "</div>" + more)
 
 
 def html_figure(path: pathlib.Path, caption: str) -> str:

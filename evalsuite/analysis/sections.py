@@ -51,7 +51,7 @@ def collapse_notes(items: list[tuple[str, str, str, str]]) -> list[str]:
         tokens = [_NUM.findall(note) for _, note in members]
         numbers = [[float(x.replace(",", "")) for x in toks] for toks in tokens]
         parts = skeleton.split("#")
-        text, ranges = parts[0], []
+        text, ranges = parts[0], list[str]()
         for k, piece in enumerate(parts[1:]):
             vals = [nums[k] for nums in numbers]
             if min(vals) == max(vals):
