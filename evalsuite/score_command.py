@@ -92,8 +92,8 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
     figures = [] if no_figures else write_figures(result, out_dir / "figures")
     for issue in result.issues:
         click.secho(f"warning: {issue}", fg="yellow", err=True)
-    for note in result.resampled:
-        click.secho(f"note: resampled {note}", fg="yellow", err=True)
+    for line in _resampling_lines(result.resampled):
+        click.secho(f"warning: {line}", fg="yellow", err=True)
     if not quiet:
         click.echo(format_table(summary_frame(result.summary)))
         click.echo(f"\nWrote {paths['summary_csv']} (and per_sequence.csv, per_joint.csv, histograms.csv, "
@@ -106,3 +106,16 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
     if unscored:
         raise click.ClickException(f"nothing could be scored for condition(s) {', '.join(unscored)} (see the "
                                    f"warnings above); the other results are in {out_dir}")
+
+
+def _resampling_lines(resampled: list[str]) -> list[str]:
+    """``path (a -> b fps, why)`` entries as one line per (a, b, why) with a count and an example."""
+    import re
+
+    groups: dict[str, list[str]] = {}
+    for entry in resampled:
+        m = re.match(r"(.*) \((.*)\)$", entry)
+        path, what = (m.group(1), m.group(2)) if m else (entry, "")
+        groups.setdefault(what, []).append(path)
+    return [f"{len(paths)} file(s) resampled by interpolation ({what}), e.g. {paths[0]}; all listed in "
+            "results.json (resampled_files)" for what, paths in sorted(groups.items())]

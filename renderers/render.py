@@ -6,6 +6,7 @@ conditions of a segment are framed identically (pass ``view=`` to share it acros
 from __future__ import annotations
 
 import pathlib
+import warnings
 
 import numpy as np
 from tqdm import tqdm
@@ -25,12 +26,16 @@ def prepare_motions(sources, settings: RenderSettings, start: float | None = Non
     """Load (paths) or take (Motion objects), cut to ``start``-``end`` s, bring to one fps.
 
     The frame rate is ``settings.fps`` if set, else the first motion's; others are resampled
-    to it so the panels stay in step.
+    to it so the panels stay in step, each with a ``UserWarning`` naming the file and both rates.
     """
     motions = [s if isinstance(s, Motion) else load_motion(s) for s in sources]
     if not motions:
         raise InputError("no motion given")
     fps = settings.fps or motions[0].fps
+    for m in motions:   # never silently (the render CLI shows these as 'Warning:' lines)
+        if abs(m.fps - fps) > 1e-9 * fps:
+            warnings.warn(f"{m.source or m.name or 'motion'}: resampled by interpolation from {m.fps:g} to "
+                          f"{fps:g} fps for the video", UserWarning, stacklevel=2)
     # resample before cutting, so a cut of S seconds has S * fps frames whatever the source rate
     motions = [resample(m, fps) for m in motions]
     if start is not None or end is not None:

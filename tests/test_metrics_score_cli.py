@@ -297,6 +297,8 @@ def test_empty_and_missing_folders_and_bad_options(folders, tmp_path):
 
 def test_fgd_option_reports_missing_extra(folders, tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "evalsuite.learned.fgd", None)
+    # an earlier test may have imported the family already: it must be re-imported (and fail) here
+    monkeypatch.setitem(sys.modules, "evalsuite.learned.family", None)
     res = run(["-r", folders["natural"], folders["jitter"], "-m", "kinematics", "--no-figures", "--fgd",
                tmp_path / "model.pt", "-o", tmp_path / "o"], ok=False)
     assert res.exit_code == 1

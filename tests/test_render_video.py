@@ -54,7 +54,9 @@ def test_video_fps_follows_the_motion_or_the_resampling(tmp_path):
     assert imageio_ffmpeg.count_frames_and_secs(str(out))[0] == 24
     settings = RenderSettings(width=96, height=72, fps=12.0)
     out = tmp_path / "v12.mp4"
-    info = render_video(prepare_motions([m], settings), out, settings)
+    with pytest.warns(UserWarning, match="resampled by interpolation from 24 to 12 fps"):   # never silently
+        prepared = prepare_motions([m], settings)
+    info = render_video(prepared, out, settings)
     # 24 frames at 24 fps span 23/24 s; resampled at 12 fps: frames at 0, 1/12, ..., 11/12 s
     assert info["n_frames"] == 12
     assert probe(out)["fps"] == 12.0

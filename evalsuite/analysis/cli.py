@@ -5,6 +5,7 @@ import pathlib
 
 import click
 
+from evalsuite.analysis.presets import PRESETS, preset_values
 from evalsuite.errors import InputError
 
 
@@ -60,6 +61,13 @@ def _playback(value):
 @click.option("--bootstrap", "n_boot", type=click.IntRange(0), default=1000, show_default=True,
               help="Participant-bootstrap rounds for Elo CIs (0 = none).")
 @click.option("--seed", type=int, default=42, show_default=True, help="Seed of the bootstrap.")
+@click.option("--elo-prior", type=click.FloatRange(0, 1e6), default=0.1, show_default=True,
+              help="Virtual ties per compared pair in the Bradley-Terry fit (a penalty that keeps a condition "
+                   "that never wins finite); 0 = plain maximum likelihood, the GENEA Leaderboard's estimate.")
+@click.option("--preset", type=click.Choice(sorted(PRESETS)), default=None,
+              help="Reproduce a published procedure; 'leaderboard': Elo prior 0, 10000 participant-bootstrap "
+                   "rounds drawn as the Leaderboard draws them (seed 42), exclusion on any failed attention "
+                   "check, ties as half wins. Options given explicitly override it.")
 @click.option("--mismatch-suffix", default=":mismatched", show_default=True,
               help="Condition X + this suffix is X's mismatched stimulus (matched/mismatched designs).")
 @click.option("--no-figures", is_flag=True, help="Tables only (faster).")
@@ -69,9 +77,10 @@ def _playback(value):
 @click.option("--scores", type=click.Path(dir_okay=False, path_type=pathlib.Path), default=None,
               help="summary.csv of `evalsuite score`: adds a 'Metrics vs humans' section and correlations.csv "
                    "(see `evalsuite correlate`).")
-def analyze(results, out_dir, study, tie_policy, ci_method, holm_per_question, alpha, attention_fails,
+@click.pass_context
+def analyze(ctx, results, out_dir, study, tie_policy, ci_method, holm_per_question, alpha, attention_fails,
             keep_incomplete, duplicates, no_mushra_screening, implausible_playback, zero_method, n_boot, seed,
-            mismatch_suffix, no_figures, blind, reveal, scores=None):
+            elo_prior, preset, mismatch_suffix, no_figures, blind, reveal, scores=None):
     """Analyse RESULTS (a study's results.csv or a battles CSV).
 
     Applies the exclusion rules, then runs the tests that fit the data: pairwise
@@ -89,11 +98,16 @@ def analyze(results, out_dir, study, tie_policy, ci_method, holm_per_question, a
         from evalsuite.analysis.correlate_io import read_scores
 
         read_scores(scores)  # a malformed file stops here, before any statistic is computed
-    opts = AnalysisOptions(tie_policy=tie_policy, ci_method=ci_method,
-                           holm_scope="question" if holm_per_question else "study", alpha=alpha,
-                           attention_fails=attention_fails, keep_incomplete=keep_incomplete,
-                           duplicates=duplicates, mushra_screening=not no_mushra_screening,
-                           implausible_playback=implausible_playback,
-                           zero_method=zero_method, n_boot=n_boot, seed=seed, mismatch_suffix=mismatch_suffix,
-                           study=study, figures=not no_figures, scores=str(scores) if scores else None)
+    given = {"tie_policy": tie_policy, "attention_fails": attention_fails, "n_boot": n_boot, "seed": seed,
+             "elo_prior": elo_prior}
+    values = dict(given)
+    for name, value in preset_values(preset).items():
+        if name not in given or ctx.get_parameter_source(name) == click.core.ParameterSource.DEFAULT:
+            values[name] = value
+    opts = AnalysisOptions(ci_method=ci_method, holm_scope="question" if holm_per_question else "study",
+                           alpha=alpha, keep_incomplete=keep_incomplete, duplicates=duplicates,
+                           mushra_screening=not no_mushra_screening, implausible_playback=implausible_playback,
+                           zero_method=zero_method, mismatch_suffix=mismatch_suffix, study=study,
+                           figures=not no_figures, preset=preset, scores=str(scores) if scores else None,
+                           **values)
     run(results, out_dir, opts, blind=blind, reveal=reveal, echo=click.echo)

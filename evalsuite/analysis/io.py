@@ -16,6 +16,7 @@ from typing import NoReturn
 import numpy as np
 import pandas as pd
 
+from evalsuite.analysis import csvtext, validate
 from evalsuite.contracts import results as results_contract
 from evalsuite.errors import InputError
 
@@ -42,41 +43,7 @@ def _read_table(path) -> pd.DataFrame:
     path = pathlib.Path(path)
     if not path.is_file():
         _fail("file not found (expected a results.csv or battles CSV)", path)
-    records, lines = [], []
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh, strict=True)
-            header = next(reader, None)
-            if not header:
-                _fail("empty file: expected a header row and at least one data row", path)
-            header = [c.strip() for c in header]
-            for row in reader:
-                if not row or (len(row) == 1 and not row[0].strip()):
-                    continue  # blank line
-                if len(row) != len(header):
-                    _fail(f"row has {len(row)} fields but the header has {len(header)}; "
-                          "not a well-formed CSV (unquoted comma?)", path, line=reader.line_num)
-                records.append(row)
-                # reader.line_num is the file line where this record ended (quoted newlines ok).
-                lines.append(reader.line_num)
-    except UnicodeDecodeError as exc:
-        _fail(f"not UTF-8 text ({exc.reason} at byte {exc.start})", path)
-    except csv.Error as exc:
-        _fail(f"not a well-formed CSV: {exc}", path)
-    dupes = sorted({c for c in header if header.count(c) > 1})
-    if dupes:
-        _fail(f"duplicate column(s) in the header: {', '.join(dupes)}", path, line=1)
-    if not records:
-        _fail("no data rows after the header", path)
-    # Everything as text: the validation decides what each column must hold (and "NA",
-    # a common condition name, stays a string).
-    df = pd.DataFrame(records, columns=header, dtype=str)
-    for col in df.columns:
-        df[col] = df[col].str.strip()
-    # Unknown extra columns are ignored; one called "line" would clash with ours.
-    df = df.drop(columns=[c for c in ("line", "value") if c in df.columns])
-    df.insert(0, "line", np.asarray(lines, dtype=int))
-    return df
+    return csvtext.read_cells(path)
 
 
 def detect_format(path) -> str:
@@ -117,25 +84,6 @@ def _check_nonempty(df, mask, col, path, what):
     if bad.any():
         row = df[bad].iloc[0]
         _fail(f"empty value; {what}", path, line=int(row["line"]), field=col)
-
-
-def _check_int(df, mask, col, path, lo=None, hi=None, allow_empty=False):
-    vals = df.loc[mask, col]
-    if allow_empty:
-        vals = vals[vals != ""]
-    num = pd.to_numeric(vals, errors="coerce")
-    ok = num.notna() & (num == np.floor(num))
-    if lo is not None:
-        ok &= num >= lo
-    if hi is not None:
-        ok &= num <= hi
-    if not ok.all():
-        idx = ok[~ok].index[0]
-        rng = "an integer" + (f" >= {lo}" if lo is not None and hi is None else "")
-        if lo is not None and hi is not None:
-            rng = f"an integer in {lo}..{hi}"
-        _fail(f"invalid value {df.at[idx, col]!r}; expected {rng}", path,
-              line=int(df.at[idx, "line"]), field=col)
 
 
 def read_results(path, study: str | None = None) -> pd.DataFrame:
@@ -187,8 +135,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
         _check_allowed(df, all_rows, flag, ("0", "1"), path)
     _check_allowed(df, all_rows, "attention_passed", ("0", "1", ""), path)
     _check_allowed(df, all_rows, "playback_implausible", ("0", "1", ""), path)
-    _check_int(df, all_rows & (df["trial"] != ""), "trial", path, lo=0)
-    _check_int(df, all_rows, "rt_ms", path, lo=0, allow_empty=True)
+    validate.normalise_times(df, path)
 
     # One session belongs to one participant: otherwise exclusions per participant break.
     owners = df.groupby("session")["participant"].nunique()
@@ -229,6 +176,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
               line=int(row["line"]), field="strength")
     _check_nonempty(df, mu | lk, "condition", path, "rating rows (mushra, likert) name the rated condition")
     _check_allowed(df, mu, "role", ROLES, path)
+    validate.check_numbers(df, path, mu, lk)
     value = pd.to_numeric(df["answer"].where(mu | lk), errors="coerce")
     bad_mu = mu & ~((value >= 0) & (value <= 100))
     if bad_mu.any():
@@ -240,6 +188,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
         row = df[bad_lk].iloc[0]
         _fail(f"invalid Likert answer {row['answer']!r}; expected an integer 1..k", path,
               line=int(row["line"]), field="answer")
+    validate.check_likert_points(df, lk, value, path)
     _check_nonempty(df, lk, "scale", path, "likert rows name the scale the statement belongs to")
     # A statement belongs to one scale; a statement listed under two scales is a typo.
     lk_rows = df[lk]
@@ -253,11 +202,14 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
 
     df = df.copy()
     df["value"] = value.where(mu | lk)
+    df, excluded = validate.duplicate_rows(df, path)
     df["is_training"] = df["is_training"].astype(int)
     df["is_attention_check"] = df["is_attention_check"].astype(int)
     df.attrs["source"] = os.fspath(path)
     df.attrs["format"] = "results"
     df.attrs["study"] = studies[0] if study is None else study
+    # (line, reason, detail) of rows excluded by the reader (plain tuples: attrs are copied along)
+    df.attrs["rows_excluded"] = tuple(excluded.itertuples(index=False, name=None))
     return df.reset_index(drop=True)
 
 

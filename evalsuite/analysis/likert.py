@@ -11,7 +11,7 @@ rating one condition on one page; a unit's scale score is the mean of its statem
   scores averaged per condition, so a participant counts once per condition).
 - One-way ANOVA (``scipy.stats.f_oneway``) across conditions on those scores, post-hoc
   Welch t-tests with Bonferroni correction; repeated-measures ANOVA (statsmodels
-  ``AnovaRM``) on the participants who rated every condition, post-hoc paired t-tests
+  ``AnovaRM``, computed in closed form by :func:`rm_anova`) on the participants who rated every condition, post-hoc paired t-tests
   (``scipy.stats.ttest_rel``) with Bonferroni correction.
 """
 from __future__ import annotations
@@ -22,7 +22,6 @@ import math
 import numpy as np
 import pandas as pd
 from scipy import stats
-from statsmodels.stats.anova import AnovaRM
 
 from evalsuite.analysis.pairwise import adjust_pvalues
 from evalsuite.analysis.ratings import mean_ci
@@ -48,6 +47,28 @@ def cronbach_alpha(items) -> float:
 
 def _bonferroni(p):
     return adjust_pvalues(p, "bonferroni")
+
+
+def rm_anova(Y) -> tuple[float, float, float, float]:
+    """One-way repeated-measures ANOVA on a complete ``(subjects, conditions)`` matrix.
+
+    ``SS_cond = n sum_j (m_j - m)^2``, ``SS_subj = k sum_i (m_i - m)^2``,
+    ``SS_err = SS_total - SS_cond - SS_subj``; ``F = (SS_cond / (k - 1)) / (SS_err / ((n - 1)(k - 1)))``.
+    The same numbers as statsmodels ``AnovaRM`` with one within factor (tested), in O(n k) instead
+    of a design matrix with a column per subject. Returns ``(F, df_num, df_den, p)``; F and p are
+    NaN when there is no residual variance.
+    """
+    Y = np.asarray(Y, dtype=float)
+    n, k = Y.shape
+    m = Y.mean()
+    ss_cond = n * ((Y.mean(axis=0) - m) ** 2).sum()
+    ss_subj = k * ((Y.mean(axis=1) - m) ** 2).sum()
+    ss_err = ((Y - m) ** 2).sum() - ss_cond - ss_subj
+    df1, df2 = k - 1, (n - 1) * (k - 1)
+    if ss_err <= 1e-12 * max(((Y - m) ** 2).sum(), 1e-300):
+        return math.nan, float(df1), float(df2), math.nan
+    F = (ss_cond / df1) / (ss_err / df2)
+    return float(F), float(df1), float(df2), float(stats.f.sf(F, df1, df2))
 
 
 def likert_tables(lk: pd.DataFrame, alpha: float = 0.05) -> dict:
@@ -98,13 +119,8 @@ def likert_tables(lk: pd.DataFrame, alpha: float = 0.05) -> dict:
         if len(conds) < 2 or len(full) < 2:
             rm["note"] = "needs >= 2 conditions and >= 2 participants who rated all of them"
         else:
-            longf = full.reset_index().melt(id_vars="participant", var_name="condition", value_name="score")
-            try:
-                t = AnovaRM(longf, depvar="score", subject="participant", within=["condition"]).fit().anova_table
-                rm.update(F=float(t["F Value"].iloc[0]), df_num=float(t["Num DF"].iloc[0]),
-                          df_den=float(t["Den DF"].iloc[0]), p_value=float(t["Pr > F"].iloc[0]))
-            except (ValueError, ZeroDivisionError) as exc:  # degenerate data, e.g. no residual variance
-                rm["note"] = f"repeated-measures ANOVA not computable: {exc}"
+            F, df1, df2, p = rm_anova(full.to_numpy(float))
+            rm.update(F=F, df_num=df1, df_den=df2, p_value=p)
             if not np.isfinite(rm["F"]):
                 rm.update(F=math.nan, p_value=math.nan,
                           note=rm["note"] or "no residual variance: repeated-measures ANOVA undefined")

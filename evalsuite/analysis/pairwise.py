@@ -224,14 +224,41 @@ def mismatch_pairs(conditions, suffix: str = ":mismatched"):
     return {c: c + suffix for c in sorted(conds) if not c.endswith(suffix) and c + suffix in conds}
 
 
+BARNARD_EXACT_MAX_CELLS = 250_000
+BARNARD_EXACT = "Barnard exact"
+BARNARD_ASYMPTOTIC = "pooled z (asymptotic Barnard)"
+
+
+def barnard_test(table) -> tuple[float, str]:
+    """Two-sided Barnard test (pooled) on a 2x2 table ``[[m1, m2], [x1, x2]]``: columns are the
+    two conditions, rows matched / mismatched preferences. Returns ``(p, test)``.
+
+    Barnard's exact test (``scipy.stats.barnard_exact``, pooled) enumerates every table with the
+    same column totals, ``(n1 + 1)(n2 + 1)`` of them, for each of many nuisance values: time and
+    memory grow as ``n1 * n2``. Up to :data:`BARNARD_EXACT_MAX_CELLS` tables (about 500
+    judgements per condition) it is used as is; above, the test is its large-sample form: the
+    same pooled statistic ``z = (p1 - p2) / sqrt(p (1 - p) (1/n1 + 1/n2))`` referred to the
+    standard normal (the exact p-value converges to it; at the switch they differ by well under
+    1e-2 in absolute p). ``test`` names which one ran; ``p`` is ``nan`` when a column is empty.
+    """
+    t = np.asarray(table, dtype=np.int64)
+    n1, n2 = t.sum(axis=0)
+    if n1 == 0 or n2 == 0:
+        return math.nan, ""
+    if (n1 + 1) * (n2 + 1) <= BARNARD_EXACT_MAX_CELLS:
+        return float(stats.barnard_exact(t, alternative="two-sided", pooled=True).pvalue), BARNARD_EXACT
+    p1, p2 = t[0, 0] / n1, t[0, 1] / n2
+    pooled = (t[0, 0] + t[0, 1]) / (n1 + n2)
+    var = pooled * (1 - pooled) * (1 / n1 + 1 / n2)
+    if var == 0:
+        return 1.0, BARNARD_ASYMPTOTIC
+    z = (p1 - p2) / math.sqrt(var)
+    return float(2 * stats.norm.sf(abs(z))), BARNARD_ASYMPTOTIC
+
+
 def barnard_p(table) -> float:
-    """Two-sided Barnard exact test (pooled) on a 2x2 table ``[[m1, m2], [x1, x2]]``:
-    columns are the two conditions, rows matched / mismatched preferences.
-    ``nan`` when a column is empty (no test possible)."""
-    t = np.asarray(table, dtype=int)
-    if (t.sum(axis=0) == 0).any():
-        return math.nan
-    return float(stats.barnard_exact(t, alternative="two-sided", pooled=True).pvalue)
+    """The p-value of :func:`barnard_test` (``nan`` when a column is empty)."""
+    return barnard_test(table)[0]
 
 
 def mismatch_tables(pw_table: pd.DataFrame, *, suffix: str = ":mismatched", tie_policy: str = "split",
@@ -243,7 +270,8 @@ def mismatch_tables(pw_table: pd.DataFrame, *, suffix: str = ":mismatched", tie_
     n_matched, n_mismatched, n_tie, pref_matched (tie policy, default ``split`` as GENEA),
     Clopper-Pearson CI, uncorrected binomial p against 50 %. ``between``: Barnard's exact
     test between every two conditions of a question on their (tie-adjusted) matched /
-    mismatched counts, Holm-corrected over all those tests.
+    mismatched counts (:func:`barnard_test`: exact, or its large-sample form for large
+    counts, named in ``test``), Holm-corrected over all those tests.
     """
     per, between = [], []
     if pw_table.empty:
@@ -269,12 +297,15 @@ def mismatch_tables(pw_table: pd.DataFrame, *, suffix: str = ":mismatched", tie_
                         "note": _no_test_note(n_m, n_x, n_t, tie_policy)})
         for c1, c2 in itertools.combinations(sorted(adj), 2):
             t = [[adj[c1][0], adj[c2][0]], [adj[c1][1], adj[c2][1]]]
-            p = barnard_p(t)
+            p, test = barnard_test(t)
+            note = "" if np.isfinite(p) else "no judgements for one of the conditions"
+            if test == BARNARD_ASYMPTOTIC:
+                note = (f"{sum(adj[c1])} and {sum(adj[c2])} judgements: above the exact test's limit "
+                        f"({BARNARD_EXACT_MAX_CELLS:,} tables), pooled z test")
             between.append({"question": q, "condition_1": c1, "condition_2": c2,
                             "pref_1": adj[c1][0] / sum(adj[c1]) if sum(adj[c1]) else math.nan,
                             "pref_2": adj[c2][0] / sum(adj[c2]) if sum(adj[c2]) else math.nan,
-                            "p_value": p,
-                            "note": "" if np.isfinite(p) else "no judgements for one of the conditions"})
+                            "p_value": p, "test": test, "note": note})
     per_df = pd.DataFrame(per)
     between_df = pd.DataFrame(between)
     if not between_df.empty:

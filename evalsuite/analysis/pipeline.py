@@ -17,6 +17,7 @@ from evalsuite.analysis.likert import likert_tables
 from evalsuite.analysis.pairwise import mismatch_tables, orient, pairwise_table
 from evalsuite.analysis.ranking import elo_table
 from evalsuite.analysis.ratings import rating_summary, significance_matrix, wilcoxon_pairs
+from evalsuite.analysis.sections import collapse_notes, display_order, settings_rows
 
 
 @dataclass
@@ -35,6 +36,9 @@ class AnalysisOptions:
     zero_method: str = "wilcox"
     n_boot: int = 1000
     seed: int = 42
+    elo_prior: float = 0.1
+    bootstrap_sampler: str = "multinomial"
+    preset: str | None = None
     mismatch_suffix: str = ":mismatched"
     mismatch_tie_policy: str = "split"
     study: str | None = None
@@ -48,19 +52,20 @@ class AnalysisResult:
     tables: dict = field(default_factory=dict)
     figures: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    note_details: list = field(default_factory=list)
     exclusions: object = None
     blinded: bool = False
     key_path: pathlib.Path | None = None
     report_path: pathlib.Path | None = None
 
 
-def _notes(table: pd.DataFrame, what: str, keys) -> list[str]:
+def _notes(table: pd.DataFrame, what: str, keys, name: str) -> list[tuple[str, str, str, str]]:
+    """(what, subject, note, table name) for every row of ``table`` with a note."""
     if table is None or table.empty or "note" not in table.columns:
         return []
-    out = []
-    for _, r in table[table["note"].astype(str) != ""].iterrows():
-        out.append(f"{what} {' / '.join(str(r[k]) for k in keys)}: {r['note']}")
-    return out
+    sub = table[table["note"].astype(str) != ""]
+    subjects = sub[list(keys)].astype(str).agg(" / ".join, axis=1) if len(sub) else []
+    return [(what, s, str(n), name) for s, n in zip(subjects, sub["note"])]
 
 
 def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: bool = False,
@@ -69,6 +74,7 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
     opt = options or AnalysisOptions()
     out_dir = pathlib.Path(out_dir)
     raw = read_any(path, study=opt.study)
+    rows_excluded = pd.DataFrame(list(raw.attrs.get("rows_excluded", ())), columns=["line", "reason", "detail"])
     out_dir.mkdir(parents=True, exist_ok=True)
     salt, reveal_salt = blinding.resolve(out_dir, blind, reveal)
     names = blinding.all_conditions(raw)
@@ -88,6 +94,12 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
          f"{s['rows_analysed']} judgements")
     T = res.tables
     T["exclusions"] = excl.table
+    T["rows_excluded"] = rows_excluded
+    row_counts = rows_excluded["reason"].value_counts().to_dict()
+    if row_counts:
+        echo("Rows excluded before the analysis: " + ", ".join(f"{n} {r}" for r, n in sorted(row_counts.items()))
+             + " (rows_excluded.csv)")
+    items: list[tuple[str, str, str, str]] = []
 
     # The design = every judgement row of the file (any session), so a comparison emptied
     # by the exclusions is still listed, with a note instead of a p-value.
@@ -99,43 +111,47 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
         T["pairwise"] = pairwise_table(pw, tie_policy=opt.tie_policy, ci_method=opt.ci_method,
                                        holm_scope=opt.holm_scope, alpha=opt.alpha,
                                        comparisons=comps.itertuples(index=False, name=None))
-        res.notes += _notes(T["pairwise"], "pairwise", ["question", "condition_a", "condition_b"])
+        items += _notes(T["pairwise"], "pairwise", ["question", "condition_a", "condition_b"], "pairwise")
         per, between = mismatch_tables(T["pairwise"], suffix=opt.mismatch_suffix,
                                        tie_policy=opt.mismatch_tie_policy, alpha=opt.alpha)
         if not per.empty:
             T["mismatch"] = per
-            res.notes += _notes(per, "matched/mismatched", ["question", "condition"])
+            items += _notes(per, "matched/mismatched", ["question", "condition"], "mismatch")
         if not between.empty:
             T["mismatch_barnard"] = between
-            res.notes += _notes(between, "Barnard", ["question", "condition_1", "condition_2"])
+            items += _notes(between, "Barnard", ["question", "condition_1", "condition_2"], "mismatch_barnard")
         # A ranking needs comparisons between systems; matched-vs-mismatched pairs are not.
         mism = pw["condition_b"] == pw["condition_a"] + opt.mismatch_suffix
         mism |= pw["condition_a"] == pw["condition_b"] + opt.mismatch_suffix
         ranked = pw[~mism] if opt.mismatch_suffix else pw
         if not ranked.empty:
-            T["elo"] = elo_table(ranked, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha)
-            res.notes += _notes(T["elo"].drop_duplicates(["question", "note"]), "ranking", ["question"])
+            T["elo"] = elo_table(ranked, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha,
+                                 prior=opt.elo_prior, sampler=opt.bootstrap_sampler)
+            items += _notes(T["elo"].drop_duplicates(["question", "note"]), "ranking", ["question"], "elo")
     mu_design = design[design["page_type"] == "mushra"]
     mu = data[data["page_type"] == "mushra"]
     if not mu_design.empty:
         T["ratings"] = rating_summary(mu, opt.alpha,
                                       expected=set(zip(mu_design["question"], mu_design["condition"])))
-        res.notes += _notes(T["ratings"], "ratings", ["question", "condition"])
+        items += _notes(T["ratings"], "ratings", ["question", "condition"], "ratings")
         T["ratings_pairwise"] = wilcoxon_pairs(mu, zero_method=opt.zero_method, holm_scope=opt.holm_scope,
                                                alpha=opt.alpha)
-        res.notes += _notes(T["ratings_pairwise"], "Wilcoxon", ["question", "condition_1", "condition_2"])
+        items += _notes(T["ratings_pairwise"], "Wilcoxon", ["question", "condition_1", "condition_2"],
+                            "ratings_pairwise")
     lk = data[data["page_type"] == "likert"]
     if not design[design["page_type"] == "likert"].empty:
         if lk.empty:
-            res.notes.append("likert: no responses left after exclusions")
+            items.append(("likert", "", "no responses left after exclusions", ""))
         else:
             for name, t in likert_tables(lk, opt.alpha).items():
                 T[f"likert_{name}"] = t
-            res.notes += _notes(T["likert_reliability"], "Cronbach's alpha", ["scale"])
-            res.notes += _notes(T["likert_anova"], "ANOVA", ["scale", "test"])
+            items += _notes(T["likert_reliability"], "Cronbach's alpha", ["scale"], "likert_reliability")
+            items += _notes(T["likert_anova"], "ANOVA", ["scale", "test"], "likert_anova")
     if data.empty:
-        res.notes.append("no judgements left after exclusions: nothing to test")
+        items.append(("data", "", "no judgements left after exclusions: nothing to test", ""))
 
+    res.note_details = [f"{w} {sub}: {n}" if sub else f"{w}: {n}" for w, sub, n, _ in items]
+    res.notes = collapse_notes(items)
     for note in res.notes:
         echo(f"note: {note}")
     for name, table in T.items():
@@ -152,7 +168,9 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
     res.report_path.write_text(report.html_report(title, sections), encoding="utf-8")
     summary = {"input": str(path), "study": raw.attrs.get("study"), "format": raw.attrs.get("format"),
                "blinded": res.blinded, "options": asdict(opt),
-               "exclusions": {k: v for k, v in excl.summary.items()}, "notes": res.notes}
+               "exclusions": {k: v for k, v in excl.summary.items()}, "rows_excluded": row_counts,
+               "notes": res.notes,
+               "note_details": res.note_details}
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
     if reveal_salt is not None:
         res.key_path = blinding.finish_reveal(out_dir, reveal_salt, names, opt.mismatch_suffix)
@@ -174,22 +192,13 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
         figs.append((p, caption))
         return report.html_figure(p, caption)
 
+    names = {id(t): n for n, t in T.items()}
+
+    def tbl(df):
+        return report.html_table(display_order(df), names.get(id(df)))
+
     s = res.exclusions.summary
-    settings = pd.DataFrame([
-        ("input", f"{pathlib.Path(path).name} ({raw.attrs.get('format')})"),
-        ("study", raw.attrs.get("study")),
-        ("tie policy (pairwise)", opt.tie_policy),
-        ("tie policy (matched/mismatched)", opt.mismatch_tie_policy),
-        ("preference CI", f"{opt.ci_method}, {100 * (1 - opt.alpha):g}%"),
-        ("multiple comparisons", f"Holm-Bonferroni per {opt.holm_scope}, alpha = {opt.alpha:g}"),
-        ("Wilcoxon zero differences", opt.zero_method),
-        ("attention checks", "exclude on any failure" if opt.attention_fails == 1
-         else f"exclude at >= {opt.attention_fails} failures"),
-        ("BS.1534-3 post-screening", "on" if opt.mushra_screening else "off"),
-        ("implausible playback", (f"exclude at >= {opt.implausible_playback} flagged pages" if opt.implausible_playback
-                                  else "off") + f" ({s['sessions_with_implausible_playback']} sessions flagged)"),
-        ("bootstrap", f"{opt.n_boot} participant resamples, seed {opt.seed}"),
-    ], columns=["setting", "value"])
+    settings = settings_rows(opt, raw, T, f"{pathlib.Path(path).name} ({raw.attrs.get('format')})")
     head = []
     if res.blinded:
         head.append('<p class="blind">BLIND ANALYSIS: condition names are replaced by codes. '
@@ -207,26 +216,30 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
                   "(media never fetched, or answered faster than the clips last); "
                   + ("they are excluded (implausible_playback)." if opt.implausible_playback else
                      "the rule is off (--implausible-playback), so they are analysed.") + "</p>")
+    dropped = T["rows_excluded"]
+    if not dropped.empty:
+        ex.append("<p>Rows excluded by the reader before any statistic (each listed in rows_excluded.csv):</p>")
+        ex.append(report.html_table(dropped["reason"].value_counts().rename_axis("reason").reset_index(name="rows")))
     if s["reasons"]:
         ex.append(report.html_table(pd.DataFrame(sorted(s["reasons"].items()), columns=["reason", "sessions"])))
-    ex.append(report.html_table(T["exclusions"]) if not T["exclusions"].empty else "<p>Nobody was excluded.</p>")
+    ex.append(tbl(T["exclusions"]) if not T["exclusions"].empty else "<p>Nobody was excluded.</p>")
     sections.append(("Exclusions", ex))
     if res.notes:
         sections.append(("Notes", ['<div class="note"><ul>' + "".join(
             f"<li>{html.escape(n)}</li>" for n in res.notes) + "</ul></div>"]))
 
     if "pairwise" in T:
-        parts = [report.html_table(T["pairwise"])]
+        parts = [tbl(T["pairwise"])]
         if opt.figures:
             for q in sorted(T["pairwise"]["question"].unique()):
                 parts.append(add(report.fig_preferences(T["pairwise"], q, opt.tie_policy),
                                  f"preference_{_safe(q)}", f"Pairwise preference with 95% CIs: {q}"))
         sections.append(("Pairwise preferences", parts))
     if "mismatch" in T:
-        parts = [report.html_table(T["mismatch"])]
+        parts = [tbl(T["mismatch"])]
         if "mismatch_barnard" in T:
             parts.append("<p>Barnard's exact test between conditions (Holm-corrected):</p>")
-            parts.append(report.html_table(T["mismatch_barnard"]))
+            parts.append(tbl(T["mismatch_barnard"]))
         if opt.figures:
             for q, sub in T["mismatch"].groupby("question"):
                 parts.append(add(report.fig_bars_ci(sub, "condition", "pref_matched",
@@ -236,15 +249,17 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
                                  f"mismatch_{_safe(q)}", f"Matched vs mismatched: {q}"))
         sections.append(("Matched vs mismatched", parts))
     if "elo" in T:
-        parts = [report.html_table(T["elo"])]
+        parts = [tbl(T["elo"])]
         if opt.figures:
             for q in sorted(T["elo"]["question"].unique()):
                 if np.isfinite(T["elo"].loc[T["elo"]["question"] == q, "elo"].astype(float)).any():
-                    parts.append(add(report.fig_elo(T["elo"], q), f"elo_{_safe(q)}", f"Elo with 95% CIs: {q}"))
+                    parts.append(add(report.fig_elo(T["elo"], q, opt.elo_prior, 100 * (1 - opt.alpha)),
+                                     f"elo_{_safe(q)}", f"Elo ({report.elo_method(opt.elo_prior)}) with "
+                                     f"{100 * (1 - opt.alpha):g}% CIs: {q}"))
         sections.append(("Ranking (Bradley-Terry / Elo)", parts))
     if "ratings" in T:
-        parts = [report.html_table(T["ratings"]), "<p>Pairwise Wilcoxon signed-rank tests:</p>",
-                 report.html_table(T["ratings_pairwise"])]
+        parts = [tbl(T["ratings"]), "<p>Pairwise Wilcoxon signed-rank tests:</p>",
+                 tbl(T["ratings_pairwise"])]
         mu = data[data["page_type"] == "mushra"]
         for q in sorted(mu["question"].unique()):
             conds = T["ratings"].loc[T["ratings"]["question"] == q].sort_values(
@@ -258,10 +273,10 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
                                  f"Significance matrix: {q}"))
         sections.append(("Ratings (0-100)", parts))
     if "likert_means" in T:
-        parts = ["<p>Reliability:</p>", report.html_table(T["likert_reliability"]),
-                 "<p>Means:</p>", report.html_table(T["likert_means"]),
-                 "<p>ANOVA:</p>", report.html_table(T["likert_anova"]),
-                 "<p>Post-hoc tests (Bonferroni):</p>", report.html_table(T["likert_posthoc"])]
+        parts = ["<p>Reliability:</p>", tbl(T["likert_reliability"]),
+                 "<p>Means:</p>", tbl(T["likert_means"]),
+                 "<p>ANOVA:</p>", tbl(T["likert_anova"]),
+                 "<p>Post-hoc tests (Bonferroni):</p>", tbl(T["likert_posthoc"])]
         if opt.figures:
             for sc, sub in T["likert_means"].groupby("scale"):
                 parts.append(add(report.fig_bars_ci(sub, "condition", "mean", f"Likert: {sc}",

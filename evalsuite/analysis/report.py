@@ -23,7 +23,7 @@ DASH = "–"
 _P_COLUMNS = {"p_value", "p_holm", "p_bonferroni"}
 _INT_LIKE = {"n", "k", "n_a", "n_b", "n_tie", "n_a_strong", "n_b_strong", "n_participants", "levels",
              "n_pages", "n_zero", "n_items", "n_units", "n_judgements", "n_matched", "n_mismatched",
-             "df_num", "df_den", "sessions"}
+             "df_num", "df_den", "sessions", "rows", "line"}
 
 
 def _fmt(col: str, v, dash: str = DASH) -> str:
@@ -128,14 +128,22 @@ def fig_preferences(table: pd.DataFrame, question: str, tie_policy: str):
     return fig
 
 
+VIOLIN_MAX = 20_000
+HTML_MAX_ROWS = 500
+
+
 def fig_ratings(mu: pd.DataFrame, question: str):
-    """Violin + box plot of 0-100 ratings per condition, sorted by median; mean as a dot."""
+    """Violin + box plot of 0-100 ratings per condition, sorted by median; mean as a dot. Box, median
+    and mean use every rating; the violin's density estimate uses at most :data:`VIOLIN_MAX` of them
+    per condition (a seeded random subsample: its outline does not change visibly, its cost does)."""
     sub = mu[mu["question"] == question]
     order = sub.groupby("condition")["value"].median().sort_values(ascending=False).index.tolist()
     data = [sub.loc[sub["condition"] == c, "value"].to_numpy(float) for c in order]
     fig, ax = plt.subplots(figsize=(max(5, 0.9 * len(order) + 2), 4.5))
     pos = np.arange(1, len(order) + 1)
+    rng = np.random.default_rng(0)   # the density outline of a large study from a seeded subsample
     vio = [d if d.size > 1 else np.r_[d, d + 1e-9] for d in data]
+    vio = [rng.choice(d, VIOLIN_MAX, replace=False) if d.size > VIOLIN_MAX else d for d in vio]
     parts = ax.violinplot(vio, positions=pos, showextrema=False, widths=0.85)
     bodies: Any = parts["bodies"]
     for b in bodies:
@@ -152,24 +160,45 @@ def fig_ratings(mu: pd.DataFrame, question: str):
     return fig
 
 
+SIGNIFICANCE_LEGEND = (("#4dac26", "row rated significantly higher than column"),
+                       ("#d6604d", "row rated significantly lower than column"),
+                       ("#bbbbbb", "not significant"),
+                       ("white", "no test (same condition, or never on the same page)"))
+
+
 def fig_significance(matrix: pd.DataFrame, question: str):
     """Significance matrix: green = row rated significantly higher than column, red = lower,
-    grey = not significant, white = no test."""
+    grey = not significant, white = no test; all four in the legend."""
     from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
 
     m = matrix.to_numpy(float)
-    fig, ax = plt.subplots(figsize=(max(4, 0.55 * len(matrix) + 2.5), max(3.5, 0.55 * len(matrix) + 1.8)))
+    n = len(matrix)
+    fig, ax = plt.subplots(figsize=(max(5.5, 0.55 * n + 2.5), max(4.5, 0.55 * n + 2.8)))
     cmap = ListedColormap(["#d6604d", "#bbbbbb", "#4dac26"]).with_extremes(bad="white")
     ax.imshow(np.ma.masked_invalid(m), cmap=cmap, vmin=-1, vmax=1)
-    ax.set_xticks(range(len(matrix)), matrix.columns, rotation=45, ha="right")
-    ax.set_yticks(range(len(matrix)), matrix.index)
-    ax.set_title(f"Wilcoxon + Holm: {question}\n(green: row > column, red: row < column)", fontsize=10)
+    ax.set_xticks(range(n), matrix.columns, rotation=45, ha="right")
+    ax.set_yticks(range(n), matrix.index)
+    ax.set_xticks(np.arange(-0.5, n, 1), minor=True)
+    ax.set_yticks(np.arange(-0.5, n, 1), minor=True)
+    ax.grid(which="minor", color="0.6", lw=0.5)
+    ax.tick_params(which="minor", length=0)
+    ax.set_title(f"Wilcoxon signed-rank + Holm: {question}", fontsize=10)
+    ax.legend(handles=[Patch(facecolor=c, edgecolor="0.4", label=lab) for c, lab in SIGNIFICANCE_LEGEND],
+              loc="upper center", bbox_to_anchor=(0.5, -0.22), fontsize=8, frameon=False, ncol=1)
     fig.tight_layout()
     return fig
 
 
-def fig_elo(elo: pd.DataFrame, question: str):
-    """Elo (Bradley-Terry) per condition with bootstrap 95 % CIs."""
+def elo_method(prior: float) -> str:
+    """What the Elo column is, in words, for figure labels and the report."""
+    if prior == 0:
+        return "Bradley-Terry MLE"
+    return f"Bradley-Terry, penalised by {prior:g} virtual ties per pair"
+
+
+def fig_elo(elo: pd.DataFrame, question: str, prior: float = 0.1, level: float = 95):
+    """Elo (Bradley-Terry) per condition with bootstrap CIs; the label says which fit."""
     sub = elo[(elo["question"] == question) & np.isfinite(elo["elo"].astype(float))]
     sub = sub.sort_values("elo")
     fig, ax = plt.subplots(figsize=(7, 0.45 * len(sub) + 1.5))
@@ -181,7 +210,7 @@ def fig_elo(elo: pd.DataFrame, question: str):
     ax.plot(sub["elo"], y, "o", color="#4c72b0")
     ax.set_yticks(y, sub["condition"])
     ax.axvline(1000, color="0.5", lw=0.8, ls="--")
-    ax.set_xlabel("Elo (Bradley-Terry MLE, 95% participant-bootstrap CI)")
+    ax.set_xlabel(f"Elo ({elo_method(prior)}; {level:g}% participant-bootstrap CI)")
     ax.set_title(f"Ranking: {question}")
     fig.tight_layout()
     return fig
@@ -233,11 +262,18 @@ figcaption{font-size:13px;color:#555}.scroll{overflow-x:auto}
 """
 
 
-def html_table(df: pd.DataFrame) -> str:
+def html_table(df: pd.DataFrame, name: str | None = None) -> str:
+    """A report table; more than :data:`HTML_MAX_ROWS` rows are cut there, with a line saying how
+    many more are in the CSV file (``name``)."""
     if df is None or df.empty:
         return "<p><em>(no rows)</em></p>"
+    more = ""
+    if len(df) > HTML_MAX_ROWS:
+        where = f" (all in {name}.csv)" if name else ""
+        more = f"<p><em>... and {len(df) - HTML_MAX_ROWS} more rows{where}</em></p>"
+        df = df.head(HTML_MAX_ROWS)
     return ('<div class="scroll">' + display_frame(df).to_html(index=False, escape=True, border=0)
-            + "</div>")
+            + "</div>" + more)
 
 
 def html_figure(path: pathlib.Path, caption: str) -> str:

@@ -43,6 +43,18 @@ def _write_rows(rows: list[dict], fmt: str, out) -> str:
     return text
 
 
+def _warn_resampled(model_fps: float, label_sets: dict, why: str = "to the model's frame rate") -> list[dict]:
+    """Warn (stderr) about every file the model will resample; returns the records for provenance."""
+    from evalsuite.learned.representation import describe_resampling, resampled_files
+
+    records = []
+    for label, motions in label_sets.items():
+        records += resampled_files(motions, model_fps, label)
+    for line in describe_resampling(records, why):
+        click.secho(f"warning: {line}", fg="yellow", err=True)
+    return records
+
+
 @click.group()
 def fgd():
     """Learned-feature metrics: FGD, raw-space FGD, NSD, codebook diversity.
@@ -87,6 +99,8 @@ def train(natural_dir, out, joints, window, stride, fps, epochs, seed, batch_siz
 
     names, preset_conv = resolve_joint_spec(joints, []) if joints != "all" else (None, None)
     motions = load_folder(natural_dir, convention=convention or preset_conv, fps=data_fps, joint_names=names)
+    _warn_resampled(fps, {"": motions}, f"for training at {fps:g} fps (each sequence's source_fps is in the "
+                    "model's provenance)")
     model = train_model(motions, joints=joints, window=window, stride=stride, fps=fps, epochs=epochs, seed=seed,
                         batch_size=batch_size, learning_rate=learning_rate, val_fraction=val_fraction,
                         representation=representation, convention=convention, architecture=architecture,
@@ -201,13 +215,16 @@ def score(model_path, natural_dir, condition_dirs, raw, latent, n_bootstrap, boo
 
     model = load_model(model_path)
     reference, conditions = _load_sets(model, natural_dir, condition_dirs, data_fps)
+    _warn_resampled(model.fps, {"reference": reference, **conditions},
+                    f"for the model ({model.fps:g} fps; listed in the output's resampled field)")
     rows = score_fgd(model, reference, conditions, raw=raw, n_bootstrap=n_bootstrap, bootstrap_unit=bootstrap_unit,
                      seed=seed, progress=True)
     if latent:
         for r in score_latent(model, reference, conditions, n_codes=n_codes, seed=seed):
             rows.append({"condition": r["condition"], "metric": r["metric"], "value": r["value"], "unit": r["unit"],
                          "ci_low": math.nan, "ci_high": math.nan, "model_hash": r["model_hash"],
-                         "window": r["window"], "n_windows_reference": None, "n_windows_condition": r["n_windows"]})
+                         "window": r["window"], "n_windows_reference": None, "n_windows_condition": r["n_windows"],
+                         "resampled": r["resampled"]})
     if fmt == "markdown":
         click.echo(f"{model.describe()}\n")
         click.echo(f"reference: {natural_dir} ({len(reference)} sequences); bootstrap {n_bootstrap} x "
@@ -235,7 +252,9 @@ def check(model_path, natural_dir, seed, as_json, data_fps):
     model = load_model(model_path)
     natural = load_folder(natural_dir, convention=model.representation.get("convention"), fps=data_fps,
                           joint_names=model.joints)
+    resampled = _warn_resampled(model.fps, {"natural": natural}, f"for the model ({model.fps:g} fps)")
     result = check_model(model, natural, seed=seed)
+    result["resampled"] = resampled
     if as_json:
         click.echo(json.dumps(result, indent=2, default=float))
     else:
@@ -260,8 +279,10 @@ def features(model_path, motion_file, out, stride, data_fps):
     from evalsuite.learned.modelfile import load_model
 
     model = load_model(model_path)
-    (motion,) = load_folder(motion_file, convention=model.representation.get("convention"), fps=data_fps,
-                            joint_names=model.joints).values()
+    loaded = load_folder(motion_file, convention=model.representation.get("convention"), fps=data_fps,
+                         joint_names=model.joints)
+    _warn_resampled(model.fps, {"": loaded}, f"for the model ({model.fps:g} fps)")
+    (motion,) = loaded.values()
     feats = model.features(motion, stride)
     np.save(out, feats)
     click.echo(f"wrote {out}: {feats.shape[0]} windows x {feats.shape[1]} features (model {model.short_hash})")

@@ -17,6 +17,7 @@ import numpy as np
 from evalsuite.errors import InputError
 from evalsuite.learned.fgd import FEATURE_UNIT, RAW_UNIT, RawReference, bootstrap_fd
 from evalsuite.learned.modelfile import FeatureModel, load_model
+from evalsuite.learned.representation import needs_resampling
 from evalsuite.metrics.families import MetricFamily, MetricInfo, ReduceContext, SequenceContext
 from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian_stats
 
@@ -47,6 +48,9 @@ class FGDFamily(MetricFamily):
 
     def measure(self, ctx: SequenceContext) -> None:
         model = _model(self.model_path)
+        if needs_resampling(ctx.motion.fps, model.fps):   # never silently: into the run's provenance
+            ctx.record.setdefault("resampled", []).append(
+                {"from_fps": float(ctx.motion.fps), "to_fps": float(model.fps), "why": "FGD model"})
         try:
             windows = model.windows(ctx.motion)
         except InputError as exc:

@@ -14,7 +14,8 @@
   one eigen-decomposition of size ``min(N_ref, N_cond, window*D)`` per condition.
 
 Windows: every complete window (or the GENEA rule, stored in the model) at the model's fps,
-joints and stride; sequences are resampled and joints selected by name to match the model;
+joints and stride; sequences are resampled (interpolation, never silently: each output row's
+``resampled`` field names the files and rates) and joints selected by name to match the model;
 a sequence that cannot match (missing joints, shorter than one window) is an InputError.
 
 Bootstrap CI (``fgd`` only): ``n_bootstrap`` resamples with replacement of whole sequences
@@ -33,12 +34,13 @@ from tqdm.auto import tqdm
 
 from evalsuite.errors import InputError
 from evalsuite.learned.modelfile import FeatureModel, load_model, torch_threads
+from evalsuite.learned.representation import resampled_files
 from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian_stats
 
 FEATURE_UNIT = "feature^2"
 RAW_UNIT = "z^2"
 ROW_KEYS = ("condition", "metric", "value", "unit", "ci_low", "ci_high", "model_hash", "window",
-            "n_windows_reference", "n_windows_condition")
+            "n_windows_reference", "n_windows_condition", "resampled")
 
 
 class WindowSet:
@@ -48,6 +50,8 @@ class WindowSet:
         if not motions:
             raise InputError(f"{label}: no sequences")
         self.names = sorted(motions)
+        # provenance: which sequences the model resamples to its frame rate (interpolation)
+        self.resampled = resampled_files({n: motions[n] for n in self.names}, model.fps, label)
         self.features: list[np.ndarray] = []
         raws = []
         for name in self.names:
@@ -192,10 +196,15 @@ def raw_frechet_distance(x: np.ndarray, y: np.ndarray) -> float:
     return RawReference(x).distance(y)["value"]
 
 
-def _row(condition, metric, value, unit, ci, model, window, n_ref, n_cond) -> dict:
+def resampled_text(records: list[dict]) -> str:
+    """``file (from -> to fps); ...`` for an output's provenance ("" when nothing was resampled)."""
+    return "; ".join(f"{r['file']} ({r['from_fps']:g} -> {r['to_fps']:g} fps)" for r in records)
+
+
+def _row(condition, metric, value, unit, ci, model, window, n_ref, n_cond, resampled="") -> dict:
     return {"condition": condition, "metric": metric, "value": float(value), "unit": unit,
             "ci_low": ci[0], "ci_high": ci[1], "model_hash": model.content_hash, "window": int(window),
-            "n_windows_reference": int(n_ref), "n_windows_condition": int(n_cond)}
+            "n_windows_reference": int(n_ref), "n_windows_condition": int(n_cond), "resampled": resampled}
 
 
 def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True, n_bootstrap: int = 1000,
@@ -212,7 +221,9 @@ def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True
 
     Returns:
         rows (dicts) with keys ``condition, metric ("fgd" | "fgd_raw"), value, unit, ci_low,
-        ci_high, model_hash, window, n_windows_reference, n_windows_condition``.
+        ci_high, model_hash, window, n_windows_reference, n_windows_condition, resampled`` (the
+        reference and condition files resampled by interpolation to the model's frame rate,
+        ``file (from -> to fps); ...``, empty when none was).
     """
     model = model_path if isinstance(model_path, FeatureModel) else load_model(model_path)
     ref = WindowSet(model, reference, raw=raw, label="reference")
@@ -234,8 +245,10 @@ def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True
             value = frechet_distance(*ref_stats, *gaussian_stats(feats))
         ci = bootstrap_fd(ref.features, cond.features, n_bootstrap=n_bootstrap, unit=bootstrap_unit,
                           seed=seed, ci_level=ci_level)
-        rows.append(_row(name, "fgd", value, FEATURE_UNIT, ci, model, model.window, ref.n_windows, cond.n_windows))
+        resampled = resampled_text(ref.resampled + cond.resampled)
+        rows.append(_row(name, "fgd", value, FEATURE_UNIT, ci, model, model.window, ref.n_windows, cond.n_windows,
+                         resampled))
         if raw_ref is not None and cond.raw is not None:
             rows.append(_row(name, "fgd_raw", raw_ref.distance(cond.raw)["value"], RAW_UNIT, (math.nan, math.nan),
-                             model, model.window, ref.n_windows, cond.n_windows))
+                             model, model.window, ref.n_windows, cond.n_windows, resampled))
     return rows

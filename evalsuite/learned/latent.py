@@ -118,7 +118,8 @@ def score_latent(model, reference: dict, conditions: dict, *, n_codes: int = 64,
     """NSD and codebook rows for the reference and every condition.
 
     Rows: ``condition, metric (nsd_k1, nsd_k2, codebook_hellinger, codebook_perplexity), value,
-    unit, model_hash, window, n_windows``. NSD is NaN for a set none of whose sequences has
+    unit, model_hash, window, n_windows, resampled`` (files of that set resampled to the
+    model's frame rate, as in :func:`~evalsuite.learned.fgd.score_fgd`). NSD is NaN for a set none of whose sequences has
     ``2 max(ks) + 1`` windows.
     """
     from evalsuite.learned.fgd import WindowSet
@@ -132,9 +133,12 @@ def score_latent(model, reference: dict, conditions: dict, *, n_codes: int = 64,
     ref_hist = code_histogram(ref_all, codebook)
     rows = []
 
-    def add(condition, metric, value, unit, n):
+    from evalsuite.learned.fgd import resampled_text
+
+    def add(condition, metric, value, unit, n, ws):
         rows.append({"condition": condition, "metric": metric, "value": float(value), "unit": unit,
-                     "model_hash": model.content_hash, "window": model.window, "n_windows": int(n)})
+                     "model_hash": model.content_hash, "window": model.window, "n_windows": int(n),
+                     "resampled": resampled_text(ws.resampled)})
 
     sets = [(reference_name, ref)] + [(name, WindowSet(model, conditions[name], raw=False, label=str(name),
                                                        stride=stride)) for name in conditions]
@@ -144,8 +148,8 @@ def score_latent(model, reference: dict, conditions: dict, *, n_codes: int = 64,
         except InputError:  # no sequence long enough for the neighbourhoods: NSD undefined, not fatal
             res = {f"nsd_k{k}": math.nan for k in ks}
         for k in ks:
-            add(name, f"nsd_k{k}", res[f"nsd_k{k}"], "ratio", ws.n_windows)
+            add(name, f"nsd_k{k}", res[f"nsd_k{k}"], "ratio", ws.n_windows, ws)
         hist = ref_hist if ws is ref else code_histogram(ws.all_features, codebook)
-        add(name, "codebook_hellinger", hellinger(ref_hist, hist), "", ws.n_windows)
-        add(name, "codebook_perplexity", perplexity(hist), f"codes (of {n_codes})", ws.n_windows)
+        add(name, "codebook_hellinger", hellinger(ref_hist, hist), "", ws.n_windows, ws)
+        add(name, "codebook_perplexity", perplexity(hist), f"codes (of {n_codes})", ws.n_windows, ws)
     return rows

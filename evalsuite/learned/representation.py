@@ -39,6 +39,31 @@ def with_convention(motion: Motion, convention: str | None) -> Motion:
                   root_offset=conv["root_offset"], joint_translation=conv["joint_translation"])
 
 
+def needs_resampling(source_fps: float, fps: float) -> bool:
+    """True when motion at ``source_fps`` is resampled (interpolated) to ``fps`` before encoding."""
+    return abs(source_fps - fps) > 1e-9 * fps
+
+
+def resampled_files(motions: dict, fps: float, label: str = "") -> list[dict]:
+    """``[{"file", "from_fps", "to_fps"}]`` for every motion of ``{name: Motion}`` that the model
+    resamples to its ``fps`` (provenance for every output that encodes them)."""
+    out = []
+    for name, m in motions.items():
+        if needs_resampling(m.fps, fps):
+            where = m.source or (f"{label}/{name}" if label else str(name))
+            out.append({"file": str(where), "from_fps": float(m.fps), "to_fps": float(fps)})
+    return out
+
+
+def describe_resampling(records: list[dict], why: str) -> list[str]:
+    """One warning line per (from, to) rate pair: how many files, one example, why."""
+    groups: dict[tuple[float, float], list[str]] = {}
+    for r in records:
+        groups.setdefault((r["from_fps"], r["to_fps"]), []).append(r["file"])
+    return [f"{len(files)} file(s) resampled by interpolation from {a:g} to {b:g} fps {why} (e.g. {files[0]})"
+            for (a, b), files in sorted(groups.items())]
+
+
 def joint_positions(motion: Motion, joints: list[str], fps: float, convention: str | None = None) -> np.ndarray:
     """Positions ``(T, J, 3)`` of ``joints`` (in that order) at ``fps`` under ``convention``."""
     missing = [j for j in joints if j not in motion.joint_names]
@@ -48,7 +73,7 @@ def joint_positions(motion: Motion, joints: list[str], fps: float, convention: s
                          f"(the motion has {motion.n_joints} joints: {', '.join(motion.joint_names[:8])}...)",
                          path=motion.source or motion.name)
     motion = with_convention(motion, convention)
-    if abs(motion.fps - fps) > 1e-9 * fps:
+    if needs_resampling(motion.fps, fps):
         motion = resample(motion, fps)
     names = motion.joint_names
     index = [names.index(j) for j in joints]

@@ -90,13 +90,16 @@ class ScoreResult:
     resampled: list[str] = field(default_factory=list)
 
 
-def _load(path: pathlib.Path, setup: ScoreSetup) -> Any:
+def _load(path: pathlib.Path, setup: ScoreSetup) -> tuple[Any, list[dict[str, Any]]]:
+    """The motion (resampled to ``--resample``) and what was resampled, for the provenance."""
     from evalsuite.motion.ops import resample
 
     motion = load_motion(path, fallback_fps=setup.fps)
+    done: list[dict[str, Any]] = []
     if setup.resample is not None and abs(motion.fps - setup.resample) > 1e-9 * setup.resample:
+        done.append({"from_fps": float(motion.fps), "to_fps": float(setup.resample), "why": "--resample"})
         motion = resample(motion, setup.resample)
-    return motion
+    return motion, done
 
 
 def _selected_positions(motion: Any, joints: list[str]) -> np.ndarray:
@@ -150,15 +153,15 @@ def score_sequence(task: tuple[Any, ...]) -> dict[str, Any]:
     natural_cache: dict[Any, Any] = {}
     for k, (cond, path) in enumerate(entries):
         try:
-            motion = _load(path, setup)
+            motion, resampled = _load(path, setup)
             pos = _selected_positions(motion, setup.joints)
             if k == 0:
                 natural_pos = pos
             rec = _measure(motion, pos, setup, conv, natural_pos, onsets, natural_cache, audio, segment)
             rec["sha256"] = file_sha256(path)
             rec["path"] = str(path)
-            if getattr(motion, "resampled_from", None):
-                rec["resampled_from"] = motion.resampled_from
+            # families that resample again (FGD to its model's rate) add their own entries
+            rec["resampled"] = resampled + rec.get("resampled", [])
             if audio_error:
                 rec.setdefault("warnings", []).append(audio_error)
             records[cond] = rec
@@ -176,7 +179,7 @@ def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict[str, Any]:
     path, setup = task
     conv = get_convention(setup.convention)
     try:
-        motion = _load(path, setup)
+        motion, _ = _load(path, setup)
         pos = _selected_positions(motion, setup.joints)
         out: dict[str, Any] = {"path": str(path), "fps": motion.fps}
         for q, order in (("speed", 1), ("acceleration", 2)):
@@ -262,8 +265,8 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]],
                      for s, r in sorted(records[c].items())} for c in plan.conditions}
     out.wrist_tracks = {c: [records[c][s]["wrist_track"] for s in sorted(records[c])
                             if records[c][s].get("wrist_track") is not None] for c in plan.conditions}
-    out.resampled = sorted({f"{r['path']} ({r['resampled_from']:g} -> {r['fps']:g} fps)"
-                            for recs in records.values() for r in recs.values() if r.get("resampled_from")})
+    out.resampled = sorted({f"{r['path']} ({e['from_fps']:g} -> {e['to_fps']:g} fps, {e['why']})"
+                            for recs in records.values() for r in recs.values() for e in r.get("resampled", ())})
     return out
 
 
