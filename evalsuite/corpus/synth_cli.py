@@ -23,7 +23,7 @@ import click
 def synth(out_dir: pathlib.Path, minutes: float, seed: int, segment_seconds: float, speaker: str, jobs: int,
           quiet: bool) -> None:
     """Synthesise a speaker corpus: espeak-ng speech with exact word times and motion from a documented
-    procedural gesture model (docs/corpus_synth.md), in the GENEA 2023 layout with per-frame gesture
+    procedural gesture model (docs/corpus.md § The synthetic speaker), in the GENEA 2023 layout with per-frame gesture
     labels and corpus.json.
 
     Example: evalsuite corpus synth -o corpus/ --minutes 10 --seed 0

@@ -1,5 +1,5 @@
 """The synthetic speaker: espeak-ng speech with exact word timings and motion from a documented procedural
-model whose speech-gesture coupling is known (docs/corpus_synth.md).
+model whose speech-gesture coupling is known (docs/corpus.md § The synthetic speaker).
 
 * :func:`synthesize_corpus` writes a corpus (GENEA 2023 layout + per-frame labels + ``corpus.json``);
 * :func:`oracle_motion` runs the same model on any transcript (the *oracle* condition), with the switches

@@ -122,7 +122,7 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
                       voice: Voice | None = None, params: MotionParams | None = None, speaker: str = "synth01",
                       jobs: int = 2, progress: bool = True) -> dict[str, Any]:
     """Write a synthetic-speaker corpus of about ``minutes`` minutes to ``out_dir``; returns ``corpus.json``'s
-    content. See docs/corpus_synth.md for the model and the files."""
+    content. See docs/corpus.md § The synthetic speaker for the model and the files."""
     from tqdm import tqdm
 
     layout, voice, params = layout or Layout(), voice or Voice(), params or MotionParams()

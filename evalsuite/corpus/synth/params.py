@@ -16,7 +16,7 @@ KINDS = ("none", "beat", "up", "wide", "self", "point", "negation")
 
 @dataclass(frozen=True)
 class MotionParams:
-    """The procedural model's parameters (see docs/corpus_synth.md for the formulas).
+    """The procedural model's parameters (see docs/corpus.md § The synthetic speaker for the formulas).
 
     The last four are the switches of the known-truth benchmark: ``offset_s`` delays every speech-driven
     event (beats, batons, nods, semantic gestures) by that many seconds; ``beats`` / ``semantic`` turn
