@@ -81,7 +81,7 @@ def test_errors_are_one_line_without_traceback(tmp_path, wav):
     tsv = tmp_path / "bad.tsv"
     tsv.write_text("0.1\t0.5\thello\n0.6\tlate\tworld\n")
     r = run(wav, "-r", "text_timing", "-t", tsv, "-o", tmp_path / "x.npy")
-    assert r.exit_code == 1 and "bad.tsv:2: expected start and end times in seconds" in r.output
+    assert r.exit_code == 1 and "bad.tsv:2: end (field 2): expected a time in seconds" in r.output
     r = run(wav, "-r", "pitch", "-o", tmp_path / "x.npy", "--option", "fmin")
     assert r.exit_code == 1 and "--option: expected KEY=VALUE, got 'fmin'" in r.output
     r = run(wav, "-r", "pitch")

@@ -1,58 +1,26 @@
 """``evalsuite features``: compute one recipe's features of a WAV file (and/or a transcript) into a ``.npy`` file."""
 from __future__ import annotations
 
-import importlib
 import json
 import pathlib
 
 import click
 import numpy as np
 
-from evalsuite.corpus.types import Transcript, Word
+from evalsuite.corpus.types import Transcript
 from evalsuite.errors import InputError
 
 __all__ = ["features", "read_transcript_file"]
 
 
-def _read_tsv(path: pathlib.Path) -> Transcript:
-    """A GENEA 2022/2023-style TSV (start, end, word per line; seconds).
-
-    Interim reader: to be replaced by ``evalsuite.corpus.transcripts.read_transcript`` (the corpus readers),
-    which :func:`read_transcript_file` uses as soon as it exists."""
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the transcript ({exc})", path=path) from None
-    words: list[Word] = []
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        if not line.strip():
-            continue
-        parts = line.rstrip("\r\n").split("\t")
-        if len(parts) < 3:
-            raise InputError(f"expected 3 tab-separated fields (start, end, word), got {len(parts)}",
-                             path=path, line=lineno)
-        try:
-            start, end = float(parts[0]), float(parts[1])
-        except ValueError:
-            if lineno == 1 and not words:
-                continue                      # a header line
-            raise InputError(f"expected start and end times in seconds, got {parts[0]!r}, {parts[1]!r}",
-                             path=path, line=lineno) from None
-        words.append(Word("\t".join(parts[2:]).strip(), start, end))
-    return Transcript(tuple(words), source=str(path))
-
-
 def read_transcript_file(path: str | pathlib.Path) -> Transcript:
-    """A transcript file through the corpus readers when present, else the interim TSV reader."""
+    """A transcript file in any format of :func:`evalsuite.corpus.transcripts.read_transcript`."""
+    from evalsuite.corpus.transcripts import read_transcript
+
     path = pathlib.Path(path)
     if not path.is_file():
         raise InputError("no such transcript file", path=path)
-    try:
-        readers = importlib.import_module("evalsuite.corpus.transcripts")
-    except ImportError:
-        return _read_tsv(path)
-    result: Transcript = readers.read_transcript(path)
-    return result
+    return read_transcript(path)
 
 
 def _parse_options(pairs: tuple[str, ...]) -> dict:
