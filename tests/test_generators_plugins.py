@@ -226,3 +226,13 @@ def test_generate_help_and_listing_do_not_import_torch():
             "print('torch' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("name", ["gesticulator", "aud2pose", "aud2motion", "aud2repr2pose", "aud2repr2pose-demo"])
+def test_info_of_the_seed_systems_says_what_they_are(name):
+    result = CliRunner().invoke(main, ["generators", "info", name])
+    assert result.exit_code == 0, result.output
+    for label in ("citation:", "licence:", "inputs:", "output:", "deviations from the paper:"):
+        assert label in result.output, (name, label)
+    assert "20 fps" in result.output
+    assert "Kucherenko" in result.output
