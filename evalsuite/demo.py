@@ -53,6 +53,12 @@ def demo(out_dir: pathlib.Path, minutes: float, budget_minutes: float, demo_mode
     evalsuite demo                      # everything into evalsuite-demo/
     evalsuite demo --minutes 2 --budget-minutes 0.2 -o quick/   # a quick look
     """
+    try:  # the generators and FGD need torch: say so before doing anything
+        import torch  # noqa: F401
+    except ImportError:
+        raise click.ClickException('the demo trains gesture generators and FGD encoders, which need PyTorch: '
+                                   'pip install "evalsuite[learned]" (torch 2.13.0, CPU build), or run '
+                                   "`bash scripts/demo`, which installs it") from None
     s = DemoSettings(out=out_dir.resolve(), minutes=minutes, budget_minutes=budget_minutes, seed=seed,
                      demo_model=demo_model.resolve() if demo_model else None)
     s.out.mkdir(parents=True, exist_ok=True)

@@ -104,7 +104,7 @@ def torch_setup(seed: int, threads: int) -> Any:
     try:
         import torch
     except ImportError:
-        raise InputError("the re-implemented generators need torch: pip install 'evalsuite[learned]' "
+        raise InputError('the re-implemented generators need PyTorch: pip install "evalsuite[learned]" '
                          "(torch 2.13.0, CPU build)") from None
     torch.set_num_threads(max(1, int(threads)))
     torch.manual_seed(seed)

@@ -86,10 +86,10 @@ class _Aud2(Generator):
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
+        st = self._settings()
+        torch_setup(seed, st["threads"])  # first: a clear message when torch is missing
         from evalsuite.generators.aud2repr2pose.training import SYSTEMS, train_system
 
-        st = self._settings()
-        torch_setup(seed, st["threads"])
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), st["representation"])
         recipe = "mfcc_kucherenko"
@@ -128,6 +128,7 @@ class _Aud2(Generator):
 
     def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
         super().load(config, model_dir)
+        torch_setup(0, 1)  # a clear message when torch is missing
         from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
         from evalsuite.generators.aud2repr2pose.training import MaxAbsScaler, Standardiser, TrainedSystem
 

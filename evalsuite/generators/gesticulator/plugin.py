@@ -94,11 +94,11 @@ class Gesticulator(Generator):
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
         from dataclasses import replace
 
+        st = self._settings()
+        torch = torch_setup(seed, st["threads"])  # first: a clear message when torch is missing
         from evalsuite.generators.gesticulator.net import GesticulatorConfig
         from evalsuite.generators.gesticulator.training import budgeted_schedule, train_gesticulator
 
-        st = self._settings()
-        torch = torch_setup(seed, st["threads"])
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), "expmap")
         tr = corpus_arrays(train, rep, audio_recipe=AUDIO_RECIPE, words=st["words"])
@@ -125,12 +125,12 @@ class Gesticulator(Generator):
     # -- generation ----------------------------------------------------------------------------------------
     def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
         super().load(config, model_dir)
-        from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
-        from evalsuite.generators.gesticulator.training import Normaliser, TrainedGesticulator
-
         assert model_dir is not None
         saved = read_json(model_dir / "settings.json")
         torch_setup(0, int(saved.get("threads", 1)))
+        from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
+        from evalsuite.generators.gesticulator.training import Normaliser, TrainedGesticulator
+
         self.saved = saved
         self.rep = PoseRepresentation.load(model_dir)
         net = GesticulatorNet(GesticulatorConfig.from_dict(saved["net"]))
