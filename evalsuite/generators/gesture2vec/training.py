@@ -214,7 +214,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
                 rec["val_loss"] = (nn.functional.mse_loss(recon, vct) + (0 if decoder_only else vq_loss)).item()
         if out_of_time(1, rec, rec["stage"]):
             # out of time: a cut encoder stage still gets one decoder epoch (the decoder must fit the codes)
-            epoch = total_vq - 1 if not decoder_only and stages.vq_decoder_epochs else total_vq
+            epoch = stages.vq_epochs - 1 if not decoder_only and stages.vq_decoder_epochs else total_vq
         log(rec)
         epoch += 1
     vq.eval()
