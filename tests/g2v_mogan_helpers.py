@@ -16,8 +16,13 @@ SEED = 3
 
 @functools.cache
 def synth_corpus_dir() -> pathlib.Path:
+    """Built once per test session (EVALSUITE_TEST_SYNTH_CORPUS names an existing one, for local iterations)."""
+    import os
+
     from evalsuite.corpus.synth.corpus import synthesize_corpus
 
+    if os.environ.get("EVALSUITE_TEST_SYNTH_CORPUS"):
+        return pathlib.Path(os.environ["EVALSUITE_TEST_SYNTH_CORPUS"])
     root = pathlib.Path(tempfile.mkdtemp(prefix="evalsuite-g2v-mogan-")) / "corpus"
     synthesize_corpus(root, MINUTES, SEED, jobs=2, progress=False)
     return root

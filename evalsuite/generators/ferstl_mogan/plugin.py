@@ -58,7 +58,7 @@ CORE_DEVIATIONS = (  # the core's (net.DEVIATIONS imports torch; a test checks t
     "come from evalsuite's ferstl_mfcc26_f0 recipe instead of openSMILE; sizes are options.",
 )
 MY_DEVIATIONS = (
-    "Sizes: width 128 and discriminators of 64 units by default (paper: 256); stages compressed (classifier 15 "
+    "Sizes: width 128 and discriminators of 64 units by default (paper: 256); stages compressed (classifier 30 "
     "epochs, MSE pre-training 30 epochs, 400 adversarial steps by default) and a time budget stops them in order.",
     "The MSE-only ablation is the MSE pre-trained generator (no adversarial stage), as the paper's baseline.",
 )
@@ -82,10 +82,10 @@ class FerstlMogan(Generator):
                 "width": "generator units (default 128; paper 256)",
                 "discriminator_width": "discriminator units (default 64)",
                 "noise_dim": "noise channels (default 8)",
-                "classifier_epochs": "phase classifier epochs (default 15)",
+                "classifier_epochs": "phase classifier epochs (default 30)",
                 "pretrain_epochs": "MSE pre-training epochs (default 30)",
                 "adversarial_steps": "adversarial steps (default 400)",
-                "batch_size": "sequences of 100 frames per batch (default 32)",
+                "batch_size": "sequences of 100 frames per batch (default 16)",
                 "learning_rate": "Adam, classifier and pre-training (default 1e-3)",
                 "adversarial_learning_rate": "RMSprop (default 1e-4)",
                 "threads": "torch threads (default 1)"},
@@ -101,10 +101,10 @@ class FerstlMogan(Generator):
         return {"ablation": ablation, "phase_labels": labels, "width": int(self.option("width", 128)),
                 "discriminator_width": int(self.option("discriminator_width", 64)),
                 "noise_dim": int(self.option("noise_dim", 8)),
-                "classifier_epochs": int(self.option("classifier_epochs", 15)),
+                "classifier_epochs": int(self.option("classifier_epochs", 30)),
                 "pretrain_epochs": int(self.option("pretrain_epochs", 30)),
                 "adversarial_steps": int(self.option("adversarial_steps", 400)),
-                "batch_size": int(self.option("batch_size", 32)),
+                "batch_size": int(self.option("batch_size", 16)),
                 "learning_rate": float(self.option("learning_rate", 1e-3)),
                 "adversarial_learning_rate": float(self.option("adversarial_learning_rate", 1e-4)),
                 "threads": int(self.option("threads", 1))}

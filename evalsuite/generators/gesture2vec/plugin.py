@@ -101,6 +101,8 @@ class Gesture2Vec(Generator):
                 "batch_size": "chunks / windows per batch (default 128, the repository's)",
                 "learning_rate": "Adam, all stages (default 1e-3, the paper's for the DAE)",
                 "reset_dead_codes": "true (default) or false: restart unused codes in VQ-DVAE training",
+                "aligned": "true (default): the translation decoder also reads the words of its chunk and the one "
+                           "before; false: attention alone (the paper's)",
                 "threads": "torch threads (default 1)"},
         deviations=CORE_DEVIATIONS + MY_DEVIATIONS)
 
@@ -121,6 +123,7 @@ class Gesture2Vec(Generator):
               "batch_size": int(self.option("batch_size", 128)),
               "learning_rate": float(self.option("learning_rate", 1e-3)),
               "reset_dead_codes": str(self.option("reset_dead_codes", True)).lower() in ("true", "1", "yes"),
+              "aligned": str(self.option("aligned", True)).lower() in ("true", "1", "yes"),
               "threads": int(self.option("threads", 1))}
         for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
             if st[name] < 1:
@@ -151,7 +154,7 @@ class Gesture2Vec(Generator):
         vposes = [rep.encode(s.load_motion()) for s in val]
         vwords = [_word_track(s.transcript, embedder) for s in val]
         config = G2VConfig(pose_dim=rep.dim, text_dim=embedder.dim, chunk=st["chunk"], stride=st["stride"],
-                           codebook=st["codebook"], **SIZES[st["size"]])
+                           codebook=st["codebook"], aligned=st["aligned"], **SIZES[st["size"]])
         stages = G2VStages(dae_epochs=st["dae_epochs"], vq_epochs=st["vq_epochs"],
                            vq_decoder_epochs=st["vq_decoder_epochs"], translation_epochs=st["translation_epochs"],
                            learning_rate=st["learning_rate"], translation_learning_rate=st["learning_rate"],

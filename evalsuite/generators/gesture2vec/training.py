@@ -80,6 +80,20 @@ def _window_words(words: WordTrack, start: float, length: float, text_dim: int) 
     return np.asarray(rows, np.float32).reshape(-1, text_dim + 1)
 
 
+def _aligned(words: WordTrack, start: float, chunk_s: float, n: int, text_dim: int) -> np.ndarray:
+    """(n, 2 (text_dim + 1)): per chunk k of a window, the mean (embedding, position in the chunk) of the words
+    starting in chunk k, then of those starting in chunk k - 1 (zeros without words)."""
+    out = np.zeros((n + 1, text_dim + 1), np.float32)     # row j: chunk j - 1 (row 0: the chunk before the window)
+    count = np.zeros(n + 1)
+    for emb, t in words:
+        j = int(np.floor((t - start) / chunk_s)) + 1
+        if 0 <= j <= n:
+            out[j] += np.concatenate([emb, [(t - start) / chunk_s - (j - 1)]])
+            count[j] += 1
+    out /= np.maximum(count, 1)[:, None]
+    return np.concatenate([out[1:], out[:-1]], axis=1)
+
+
 def _pad_words(items: list[np.ndarray], text_dim: int) -> tuple[torch.Tensor, torch.Tensor]:
     width = max(1, max(len(w) for w in items))
     x = np.zeros((len(items), width, text_dim + 1), np.float32)
@@ -97,18 +111,19 @@ def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequenc
                        pool: dict[int, list[np.ndarray]] | None = None) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Word windows and the codes of their non-overlapping chunks (and, with ``pool``, each code's clips)."""
     win = c.chunk * c.chunks_per_window
-    srcs, tgts = [], []
+    srcs, tgts, aligned = [], [], []
     with torch.no_grad():
         for i, (lat, track) in enumerate(zip(latents, words)):
             for s in range(0, len(lat) - win + 1, c.chunk):
                 feats = _latent_chunks(lat[s:s + win], c.chunk, c.chunk)
                 codes = vq.quantise(vq.encode(torch.from_numpy(feats.astype(np.float32)))).numpy()
                 srcs.append(_window_words(track, s / fps, win / fps, c.text_dim))
+                aligned.append(_aligned(track, s / fps, c.chunk / fps, c.chunks_per_window, c.text_dim))
                 tgts.append(codes)
                 if pool is not None and norm is not None:
                     for k, code in enumerate(codes):
                         pool.setdefault(int(code), []).append(norm[i][s + k * c.chunk:s + (k + 1) * c.chunk])
-    return srcs, tgts
+    return srcs, tgts, aligned
 
 
 def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], config: G2VConfig, fps: float,
@@ -220,21 +235,22 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     vq.eval()
     # 3. translation: word windows -> codes of the window's non-overlapping chunks
     train_chunks: dict[int, list[np.ndarray]] = {}
-    srcs, tgts = _translation_pairs(vq, latents, words, config, fps, norm, train_chunks)
-    vsrcs, vtgts = _translation_pairs(vq, vlatents, val_words, config, fps)
+    srcs, tgts, al = _translation_pairs(vq, latents, words, config, fps, norm, train_chunks)
+    vsrcs, vtgts, val_al = _translation_pairs(vq, vlatents, val_words, config, fps)
     if not srcs:
         raise ValueError(f"no segment has {config.chunk * config.chunks_per_window} frames for a translation window")
     code_counts = np.bincount(np.concatenate(tgts), minlength=config.codebook)
     translator = Translator(config)
     opt = torch.optim.Adam(translator.parameters(), lr=stages.translation_learning_rate)
     targets = torch.from_numpy(np.stack(tgts).astype(np.int64))
+    al_t = torch.from_numpy(np.stack(al))
     ce = nn.functional.cross_entropy
     for epoch in range(stages.translation_epochs):
         translator.train()
         total = 0.0
         for idx in _batches(len(srcs), stages.batch_size, rng):
             wx, mask = _pad_words([srcs[i] for i in idx.tolist()], config.text_dim)
-            logits = translator(wx, mask, targets[idx])
+            logits = translator(wx, mask, targets[idx], al_t[idx])
             loss = ce(logits.reshape(-1, config.codebook), targets[idx].reshape(-1))
             opt.zero_grad()
             loss.backward()
@@ -246,7 +262,8 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             with torch.no_grad():
                 wx, mask = _pad_words(vsrcs, config.text_dim)
                 vt = torch.from_numpy(np.stack(vtgts).astype(np.int64))
-                rec["val_loss"] = ce(translator(wx, mask, vt).reshape(-1, config.codebook), vt.reshape(-1)).item()
+                logits = translator(wx, mask, vt, torch.from_numpy(np.stack(val_al)))
+                rec["val_loss"] = ce(logits.reshape(-1, config.codebook), vt.reshape(-1)).item()
         stop = out_of_time(2, rec, "translation")
         log(rec)
         if stop:
@@ -282,7 +299,10 @@ def generate_gesture2vec(model: TrainedG2V, words: WordTrack, n_frames: int, *, 
     rng = np.random.default_rng(seed)
     srcs = [_window_words(words, w * win / model.fps, win / model.fps, c.text_dim) for w in range(n_windows)]
     wx, mask = _pad_words(srcs, c.text_dim)
-    codes = model.translator.generate(wx, mask, c.chunks_per_window, gen, temperature).reshape(-1)
+    al = np.stack([_aligned(words, w * win / model.fps, c.chunk / model.fps, c.chunks_per_window, c.text_dim)
+                   for w in range(n_windows)])
+    codes = model.translator.generate(wx, mask, c.chunks_per_window, gen, temperature,
+                                      torch.from_numpy(al)).reshape(-1)
     if retrieval:
         pieces = []
         for code in codes.tolist():
