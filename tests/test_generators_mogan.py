@@ -87,7 +87,8 @@ def test_training_twice_with_one_seed_gives_identical_weights(tmp_path):
 
     corpus = tiny_corpus(tmp_path / "tiny", n_segments=6, seconds=11.0)
     entry = find_generator("ferstl-mogan")
-    cfg = {"classifier_epochs": 2, "pretrain_epochs": 2, "adversarial_steps": 4, "batch_size": 4}
+    cfg = {"classifier_epochs": 2, "pretrain_epochs": 2, "adversarial_steps": 4, "batch_size": 4,
+           "realism_pretrain_steps": 3, "phase_pretrain_tries": 3}
     res = [train(entry, corpus, tmp_path / f"m{i}", seed=5, config=cfg, progress=False) for i in range(2)]
     assert res[0].meta["weights_sha256"] == res[1].meta["weights_sha256"]
     assert res[0].meta["phase_labels_source"] == "heuristic"  # the tiny corpus has no phase labels

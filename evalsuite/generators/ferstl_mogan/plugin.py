@@ -85,6 +85,9 @@ class FerstlMogan(Generator):
                 "classifier_epochs": "phase classifier epochs (default 30)",
                 "pretrain_epochs": "MSE pre-training epochs (default 30)",
                 "adversarial_steps": "adversarial steps (default 400)",
+                "realism_pretrain_steps": "steps of the realism discriminator's pre-training (default 100)",
+                "phase_pretrain_tries": "batches per generator snapshot at most in the phase discriminator's "
+                                        "pre-training (default 40)",
                 "batch_size": "sequences of 100 frames per batch (default 16)",
                 "learning_rate": "Adam, classifier and pre-training (default 1e-3)",
                 "adversarial_learning_rate": "RMSprop (default 1e-4)",
@@ -104,6 +107,8 @@ class FerstlMogan(Generator):
                 "classifier_epochs": int(self.option("classifier_epochs", 30)),
                 "pretrain_epochs": int(self.option("pretrain_epochs", 30)),
                 "adversarial_steps": int(self.option("adversarial_steps", 400)),
+                "realism_pretrain_steps": int(self.option("realism_pretrain_steps", 100)),
+                "phase_pretrain_tries": int(self.option("phase_pretrain_tries", 40)),
                 "batch_size": int(self.option("batch_size", 16)),
                 "learning_rate": float(self.option("learning_rate", 1e-3)),
                 "adversarial_learning_rate": float(self.option("adversarial_learning_rate", 1e-4)),
@@ -151,6 +156,8 @@ class FerstlMogan(Generator):
                              discriminator_width=st["discriminator_width"])
         stages = MoganStages(classifier_epochs=st["classifier_epochs"], pretrain_epochs=st["pretrain_epochs"],
                              adversarial_steps=st["adversarial_steps"], batch_size=st["batch_size"],
+                             realism_pretrain_steps=st["realism_pretrain_steps"],
+                             phase_pretrain_tries=st["phase_pretrain_tries"],
                              learning_rate=st["learning_rate"],
                              adversarial_learning_rate=st["adversarial_learning_rate"],
                              discriminators=ABLATIONS[st["ablation"]])

@@ -8,9 +8,10 @@ Stages: (1) the phase classifier on labelled data (cross-entropy; its weighted F
 reported); (2) the generator pre-trained with MSE, with snapshots of its weights kept as its "training
 history"; (3) the phase discriminator pre-trained against that history, moving to the next snapshot once it is
 right on at least 70 % of three batches in a row (or after ``phase_pretrain_tries`` batches); (4) the
-motion-realism discriminator pre-trained against a fresh generator; (5) adversarial training with RMSprop, the generator's loss the 2:4:4:1-weighted mean over
-the phase, realism, minibatch and displacement discriminators, and one MSE correction step (with the
-discontinuity penalty between consecutive sequences) per two adversarial steps.
+motion-realism discriminator pre-trained against a fresh generator; (5) adversarial training with RMSprop, the
+generator's loss the 2:4:4:1-weighted mean over the phase, realism, minibatch and displacement discriminators,
+and one MSE correction step (with the discontinuity penalty between consecutive sequences) per two adversarial
+steps.
 
 With ``budget_seconds`` each stage must end by a cumulative share of the budget (``MoganStages.budget_shares``:
 classifier 15 %, MSE pre-training to 45 %, discriminator pre-training to 55 %, adversarial training to 100 %;

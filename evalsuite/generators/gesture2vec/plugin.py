@@ -172,7 +172,8 @@ class Gesture2Vec(Generator):
         states = {f"{name}.{k}": v for name, net in (("dae", model.dae), ("vqdvae", model.vq),
                                                      ("translator", model.translator))
                   for k, v in net.state_dict().items()}
-        meta = {"weights_sha256": weights_sha256(states), "weights_sha256_parts": shas, "train_segments": len(train), "val_segments": len(val),
+        meta = {"weights_sha256": weights_sha256(states), "weights_sha256_parts": shas,
+                "train_segments": len(train), "val_segments": len(val),
                 "code_perplexity": code_perplexity(model.code_counts), "codes_used": int((model.code_counts > 0).sum()),
                 "codebook": st["codebook"], "stopped_by_budget": model.stopped}
         return TrainingResult(out_dir, model.history, meta)
