@@ -149,6 +149,10 @@ def test_latent_nsd_lower_than_a_shuffled_control(trained):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="issue 15 criterion not met yet: FGD 2789 against mean_pose's 1705 on the "
+                                       "6-minute corpus; the frame autoencoder's own reconstruction of natural motion "
+                                       "scores 7523 (small static errors in near-motionless joints, amplified by the "
+                                       "encoder's per-dimension normalisation); see docs/generators.md")
 def test_heldout_fgd_lower_than_mean_pose(trained):
     from evalsuite.generators import criteria as C
     from evalsuite.generators.runner import generate

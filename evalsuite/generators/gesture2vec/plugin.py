@@ -114,7 +114,7 @@ class Gesture2Vec(Generator):
         decoding = str(self.option("decoding", "generative"))
         if decoding not in ("generative", "retrieval"):
             raise GeneratorError(f"decoding must be generative or retrieval, got {decoding!r}", field="decoding")
-        st = {"size": size, "decoding": decoding, "words": str(self.option("words", "minilm-static")),
+        st: dict[str, Any] = {"size": size, "decoding": decoding, "words": str(self.option("words", "minilm-static")),
               "temperature": float(self.option("temperature", 0.0)), "codebook": int(self.option("codebook", 300)),
               "chunk": int(self.option("chunk", 30)), "stride": int(self.option("stride", 10)),
               "dae_epochs": int(self.option("dae_epochs", 10)), "vq_epochs": int(self.option("vq_epochs", 15)),
@@ -166,7 +166,8 @@ class Gesture2Vec(Generator):
                 for name, net in (("dae", model.dae), ("vqdvae", model.vq), ("translator", model.translator))}
         np.savez(out_dir / "normalisers.npz", pose_mean=model.pose_mean, pose_scale=model.pose_scale)
         np.save(out_dir / "code_counts.npy", model.code_counts)
-        np.savez(out_dir / "retrieval_pool.npz", **{f"code_{k}": np.stack(v) for k, v in model.train_chunks.items()})
+        pool = {f"code_{k}": np.stack(v) for k, v in model.train_chunks.items()}
+        np.savez(out_dir / "retrieval_pool.npz", **pool)  # type: ignore[arg-type]
         write_json(out_dir / "settings.json", {**st, "net": config.to_dict(), "fps": rep.fps,
                                                "text_dim": embedder.dim})
         states = {f"{name}.{k}": v for name, net in (("dae", model.dae), ("vqdvae", model.vq),

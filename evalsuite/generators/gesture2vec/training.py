@@ -108,10 +108,13 @@ def _pad_words(items: list[np.ndarray], text_dim: int) -> tuple[torch.Tensor, to
 
 def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequence[WordTrack], c: G2VConfig,
                        fps: float, norm: Sequence[np.ndarray] | None = None,
-                       pool: dict[int, list[np.ndarray]] | None = None) -> tuple[list[np.ndarray], list[np.ndarray]]:
+                       pool: dict[int, list[np.ndarray]] | None = None
+                       ) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
     """Word windows and the codes of their non-overlapping chunks (and, with ``pool``, each code's clips)."""
     win = c.chunk * c.chunks_per_window
-    srcs, tgts, aligned = [], [], []
+    srcs: list[np.ndarray] = []
+    tgts: list[np.ndarray] = []
+    aligned: list[np.ndarray] = []
     with torch.no_grad():
         for i, (lat, track) in enumerate(zip(latents, words)):
             for s in range(0, len(lat) - win + 1, c.chunk):
@@ -170,7 +173,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             loss.backward()
             opt.step()
             total += loss.item() * len(idx)
-        rec = {"stage": "frame autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)}
+        rec: dict = {"stage": "frame autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)}
         if vx is not None:
             dae.eval()
             with torch.no_grad():
@@ -220,14 +223,15 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
                 with torch.no_grad():
                     z = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), len(dead), replace=len(ct) < len(dead)))])
                     vq.codebook.weight[torch.from_numpy(dead)] = z + 0.01 * torch.randn_like(z)
-        rec = {"stage": "vq-dvae decoder" if decoder_only else "vq-dvae", "epoch": epoch + 1,
+        stage = "vq-dvae decoder" if decoder_only else "vq-dvae"
+        rec = {"stage": stage, "epoch": epoch + 1,
                "train_loss": total / len(ct), "perplexity": code_perplexity(counts)}
         if vct is not None:
             vq.eval()
             with torch.no_grad():
                 recon, _, vq_loss = vq(vct)
                 rec["val_loss"] = (nn.functional.mse_loss(recon, vct) + (0 if decoder_only else vq_loss)).item()
-        if out_of_time(1, rec, rec["stage"]):
+        if out_of_time(1, rec, stage):
             # out of time: a cut encoder stage still gets one decoder epoch (the decoder must fit the codes)
             epoch = stages.vq_epochs - 1 if not decoder_only and stages.vq_decoder_epochs else total_vq
         log(rec)
