@@ -112,14 +112,15 @@ def latent_nsd(sequences: Sequence[np.ndarray], seed: int = 0) -> dict[str, floa
 
 
 def fgd_against_natural(corpus: Corpus, conditions: Mapping[str, Mapping[str, Motion]], *, split: str = "test",
-                        epochs: int = 20, window: int = 30, fps: float = 20.0, seed: int = 0) -> dict[str, Any]:
+                        epochs: int = 20, window: int = 30, fps: float = 20.0, seed: int = 0,
+                        joints: Sequence[str] = GENEA2020_UPPER) -> dict[str, Any]:
     """FGD of each condition's motions against the split's natural motion; the encoder (window frames at
-    ``fps``) is trained on the natural motion of the corpus's train split (GENEA 2020 upper-body joints)."""
+    ``fps``) is trained on the natural motion of the corpus's train split (``joints``: the GENEA 2020 upper
+    body by default)."""
     from evalsuite.learned.fgd import score_fgd
     from evalsuite.learned.training import train_model
 
-    joints = ",".join(GENEA2020_UPPER)
-    model = train_model(natural_motions(corpus, "train"), joints=joints, window=window, fps=fps, epochs=epochs,
+    model = train_model(natural_motions(corpus, "train"), joints=",".join(joints), window=window, fps=fps, epochs=epochs,
                         seed=seed, learning_rate=1e-3, progress=False)
     rows = score_fgd(model, dict(natural_motions(corpus, split)), {k: dict(v) for k, v in conditions.items()},
                      raw=False, n_bootstrap=0, seed=seed)
