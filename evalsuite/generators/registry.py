@@ -41,6 +41,8 @@ BUILTIN: dict[str, str] = {
     "aud2pose": "evalsuite.generators.aud2repr2pose.plugin:Aud2Pose",
     "aud2motion": "evalsuite.generators.aud2repr2pose.plugin:Aud2Motion",
     "aud2repr2pose": "evalsuite.generators.aud2repr2pose.plugin:Aud2Repr2Pose",
+    "gesture2vec": "evalsuite.generators.gesture2vec.plugin:Gesture2Vec",
+    "ferstl-mogan": "evalsuite.generators.ferstl_mogan.plugin:FerstlMogan",
     # published models
     "aud2repr2pose-demo": "evalsuite.generators.aud2repr2pose_demo.plugin:Aud2Repr2PoseDemoGenerator",
     # adapters

@@ -7,10 +7,16 @@ columns of ``positions`` whose per-frame offsets the classifier and the displace
 Stages: (1) the phase classifier on labelled data (cross-entropy; its weighted F1 on held-out data is
 reported); (2) the generator pre-trained with MSE, with snapshots of its weights kept as its "training
 history"; (3) the phase discriminator pre-trained against that history, moving to the next snapshot once it is
-right on at least 70 % of three batches in a row; (4) the motion-realism discriminator pre-trained against a
-fresh generator; (5) adversarial training with RMSprop, the generator's loss the 2:4:4:1-weighted mean over
-the phase, realism, minibatch and displacement discriminators, and one MSE correction step (with the
-discontinuity penalty between consecutive sequences) per two adversarial steps.
+right on at least 70 % of three batches in a row (or after ``phase_pretrain_tries`` batches); (4) the
+motion-realism discriminator pre-trained against a fresh generator; (5) adversarial training with RMSprop, the
+generator's loss the 2:4:4:1-weighted mean over the phase, realism, minibatch and displacement discriminators,
+and one MSE correction step (with the discontinuity penalty between consecutive sequences) per two adversarial
+steps.
+
+With ``budget_seconds`` each stage must end by a cumulative share of the budget (``MoganStages.budget_shares``:
+classifier 15 %, MSE pre-training to 45 %, discriminator pre-training to 55 %, adversarial training to 100 %;
+time a stage leaves unused goes to the later ones); a stage that reaches its deadline stops, the next starts,
+and its last history row says ``"stopped": "time budget"`` (the names are in ``TrainedMogan.stopped``).
 """
 from __future__ import annotations
 
@@ -42,12 +48,14 @@ class MoganStages:
     pretrain_epochs: int = 30
     snapshots: int = 6
     realism_pretrain_steps: int = 100
+    phase_pretrain_tries: int = 40    # batches per generator snapshot at most, if never 3 right in a row
     adversarial_steps: int = 1000
     batch_size: int = 32
     learning_rate: float = 1e-3
     adversarial_learning_rate: float = 1e-4
     discontinuity_weight: float = 1.0
     discriminators: tuple[str, ...] = ("phase", "realism", "minibatch", "displacement")  # ablations drop some
+    budget_shares: tuple[float, ...] = (0.15, 0.45, 0.55, 1.0)   # cumulative deadlines of the stages
 
 
 @dataclass
@@ -62,6 +70,7 @@ class TrainedMogan:
     arm_columns: np.ndarray
     classifier_f1: float
     history: list[dict] = field(default_factory=list)
+    stopped: list[str] = field(default_factory=list)
 
 
 def weighted_f1(true: np.ndarray, pred: np.ndarray, n_classes: int) -> float:
@@ -98,11 +107,21 @@ def _classifier_input(pos: torch.Tensor, pitch: torch.Tensor, arm: torch.Tensor)
 def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases: Sequence[np.ndarray],
                 arm_columns: Sequence[int], config: MoganConfig, stages: MoganStages = MoganStages(), *,
                 seed: int = 0, val: tuple[Sequence[np.ndarray], Sequence[np.ndarray], Sequence[np.ndarray]] | None = None,
+                budget_seconds: float | None = None,
                 on_step: Callable[[dict], None] | None = None) -> TrainedMogan:
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     history: list[dict] = []
+    stopped: list[str] = []
     t0 = time.perf_counter()
+
+    def late(stage: int, name: str) -> bool:
+        if budget_seconds is None or time.perf_counter() - t0 < budget_seconds * stages.budget_shares[stage]:
+            return False
+        if name not in stopped:
+            stopped.append(name)
+            log({"stage": name, "stopped": "time budget"})
+        return True
 
     def log(record: dict) -> None:
         record["seconds"] = time.perf_counter() - t0
@@ -138,7 +157,9 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
             opt.zero_grad()
             loss.backward()
             opt.step()
-        log({"stage": "phase classifier", "epoch": epoch + 1, "loss": loss.item()})
+        log({"stage": "phase classifier", "epoch": epoch + 1, "train_loss": loss.item()})
+        if late(0, "phase classifier"):
+            break
     clf.eval()
     for p in clf.parameters():
         p.requires_grad_(False)
@@ -168,12 +189,16 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
             opt.zero_grad()
             loss.backward()
             opt.step()
-        if (epoch + 1) % every == 0:
+        cut = late(1, "generator MSE pre-training")
+        if (epoch + 1) % every == 0 or cut:
             snapshots.append(copy.deepcopy(gen.state_dict()))
-        log({"stage": "generator MSE pre-training", "epoch": epoch + 1, "loss": loss.item()})
+        log({"stage": "generator MSE pre-training", "epoch": epoch + 1, "train_loss": loss.item()})
+        if cut:
+            break
     if "mse_only" in stages.discriminators or not stages.discriminators:
         gen.eval()
-        return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history)
+        return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history,
+                            stopped)
 
     width = config.discriminator_width
     discs: dict[str, nn.Module] = {
@@ -209,23 +234,25 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     # (3) phase discriminator against the generator's pre-training history
     if "phase" in active:
         shadow = Generator(config)
-        for snap in snapshots[1:]:
+        for k, snap in enumerate(snapshots[1:], 1):
             shadow.load_state_dict(snap)
             shadow.eval()
-            streak, tries = 0, 0
-            while streak < 3 and tries < 200:
+            streak, tries, acc = 0, 0, float("nan")
+            while streak < 3 and tries < stages.phase_pretrain_tries and not late(2, "discriminator pre-training"):
                 idx = batches(stages.batch_size)
                 with torch.no_grad():
                     fake = shadow(X[idx], noise(len(idx), config.sequence))
                 acc = d_step("phase", d_opts["phase"], fake, idx)
                 streak = streak + 1 if acc >= 0.7 else 0
                 tries += 1
-            log({"stage": "phase discriminator pre-training", "snapshot": len(history), "accuracy": acc})
+            log({"stage": "phase discriminator pre-training", "snapshot": k, "accuracy": acc})
     # (4) motion-realism discriminator against a fresh generator
     if "realism" in active:
         fresh = Generator(config)
         f_opt = torch.optim.RMSprop(fresh.parameters(), lr=stages.adversarial_learning_rate)
         for _ in range(stages.realism_pretrain_steps):
+            if late(2, "discriminator pre-training"):
+                break
             idx = batches(stages.batch_size)
             fake = fresh(X[idx], noise(len(idx), config.sequence))
             d_step("realism", d_opts["realism"], fake, idx)
@@ -241,6 +268,8 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     mse_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
     total_w = sum(WEIGHTS[k] for k in active)
     for step in range(stages.adversarial_steps):
+        if late(3, "adversarial"):
+            break
         gen.train()
         idx = batches(stages.batch_size)
         fake = gen(X[idx], noise(len(idx), config.sequence))
@@ -264,7 +293,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
             log({"stage": "adversarial", "step": step + 1, "generator_loss": g_loss.item(),
                  **{f"d_{k}_accuracy": v for k, v in accs.items()}})
     gen.eval()
-    return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history)
+    return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history, stopped)
 
 
 @torch.no_grad()

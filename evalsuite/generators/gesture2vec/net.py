@@ -17,18 +17,9 @@ from dataclasses import asdict, dataclass
 import torch
 from torch import nn
 
-__all__ = ["G2VConfig", "FrameDAE", "VQDVAE", "Translator", "DEVIATIONS"]
+from evalsuite.generators.gesture2vec.info import DEVIATIONS
 
-DEVIATIONS = (
-    "Word embeddings from an offline model installed with evalsuite (or a user-supplied path) instead of "
-    "FastText crawl-300d-2M-subword; no GPT-3 embeddings (the original repository calls a retired paid API).",
-    "Each word's position in its window (its start as a fraction of the window) is appended to its embedding, "
-    "so that the translation model can place a gesture in time within a window.",
-    "Decoding is generative (codes -> VQ-DVAE decoder -> frame decoder) by default; the original repository's "
-    "retrieval decoding (a random training clip of the predicted code) is an option flagged in provenance.",
-    "Rotation representation: the corpus skeleton's local rotations as 3x3 matrices (as the paper) of the "
-    "modelled joints; sizes are options and the CPU preset shrinks them.",
-)
+__all__ = ["G2VConfig", "FrameDAE", "VQDVAE", "Translator", "DEVIATIONS"]
 
 
 @dataclass(frozen=True)
@@ -46,6 +37,7 @@ class G2VConfig:
     text_hidden: int = 200
     noise: float = 0.1
     dropout: float = 0.2
+    aligned: bool = True            # the decoder also reads the words of its chunk and the one before (a deviation)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -103,7 +95,12 @@ class VQDVAE(nn.Module):
 
 
 class Translator(nn.Module):
-    """word features (B, W, text_dim + 1) with lengths -> logits over codes (B, N, K), teacher forced."""
+    """word features (B, W, text_dim + 1) with lengths -> logits over codes (B, N, K), teacher forced.
+
+    With ``c.aligned`` decoding step k also reads ``aligned[:, k]`` (B, N, 2 (text_dim + 1)): the mean
+    (embedding, position in chunk) of the words starting in chunk k and in chunk k - 1 (zeros when none), through
+    a tanh layer, beside the attention context: a monotonic alignment that small corpora cannot learn from
+    attention alone."""
 
     def __init__(self, c: G2VConfig):
         super().__init__()
@@ -114,9 +111,17 @@ class Translator(nn.Module):
         self.attn_query = nn.Linear(h, h, bias=False)
         self.attn_keys = nn.Linear(2 * h, h, bias=False)
         self.attn_v = nn.Linear(h, 1, bias=False)
-        self.decoder = nn.GRUCell(h + 2 * h, h)
+        a = h if c.aligned else 0
+        self.align = nn.Linear(2 * (c.text_dim + 1), h) if c.aligned else None
+        self.decoder = nn.GRUCell(h + 2 * h + a, h)
         self.init_state = nn.Linear(2 * h, h)
-        self.out = nn.Linear(h + 2 * h, c.codebook)
+        self.out = nn.Linear(h + 2 * h + a, c.codebook)
+
+    def _context(self, state, keys, memory, mask, aligned: torch.Tensor | None, k: int) -> torch.Tensor:
+        context = self._attend(state, keys, memory, mask)
+        if self.align is None or aligned is None:
+            return context
+        return torch.cat([context, torch.tanh(self.align(aligned[:, k]))], -1)
 
     def _attend(self, state: torch.Tensor, keys: torch.Tensor, memory: torch.Tensor,
                 mask: torch.Tensor) -> torch.Tensor:
@@ -131,12 +136,13 @@ class Translator(nn.Module):
         mean = memory.sum(1) / mask.sum(1, keepdim=True).clamp_min(1)
         return memory, self.attn_keys(memory), torch.tanh(self.init_state(mean))
 
-    def forward(self, words: torch.Tensor, mask: torch.Tensor, targets: torch.Tensor) -> torch.Tensor:
+    def forward(self, words: torch.Tensor, mask: torch.Tensor, targets: torch.Tensor,
+                aligned: torch.Tensor | None = None) -> torch.Tensor:
         memory, keys, state = self._encode(words, mask)
         prev = torch.full((words.shape[0],), self.c.codebook, dtype=torch.long)
         logits = []
         for k in range(targets.shape[1]):
-            context = self._attend(state, keys, memory, mask)
+            context = self._context(state, keys, memory, mask, aligned, k)
             state = self.decoder(torch.cat([self.code_embedding(prev), context], -1), state)
             logits.append(self.out(torch.cat([state, context], -1)))
             prev = targets[:, k]
@@ -144,13 +150,14 @@ class Translator(nn.Module):
 
     @torch.no_grad()
     def generate(self, words: torch.Tensor, mask: torch.Tensor, n: int,
-                 generator: torch.Generator | None = None, temperature: float = 0.0) -> torch.Tensor:
+                 generator: torch.Generator | None = None, temperature: float = 0.0,
+                 aligned: torch.Tensor | None = None) -> torch.Tensor:
         """Greedy decoding (temperature 0) or sampling with a seeded generator -> (B, n) code indices."""
         memory, keys, state = self._encode(words, mask)
         prev = torch.full((words.shape[0],), self.c.codebook, dtype=torch.long)
         out = []
-        for _ in range(n):
-            context = self._attend(state, keys, memory, mask)
+        for k in range(n):
+            context = self._context(state, keys, memory, mask, aligned, k)
             state = self.decoder(torch.cat([self.code_embedding(prev), context], -1), state)
             logits = self.out(torch.cat([state, context], -1))
             if temperature > 0:

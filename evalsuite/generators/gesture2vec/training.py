@@ -3,6 +3,12 @@
 Per segment: ``poses`` (T, D) at the model's frame rate and ``words``: a list of (embedding (E,), start
 seconds). Training runs the paper's three stages in order (§4): the frame autoencoder, the VQ-DVAE (then its
 decoder alone, with the rest frozen: the paper's "weakened decoder" schedule), and the translation model.
+
+With ``budget_seconds`` each stage must end by a cumulative share of the budget (``G2VStages.budget_shares``:
+10 % frame autoencoder, 45 % VQ-DVAE, 45 % translation; time a stage leaves unused goes to the later ones): a
+stage that reaches its deadline stops after the current epoch, the next stage starts, and the history row says
+``"stopped": "time budget"``. With validation data each epoch also reports ``val_loss`` (the stage's loss on
+the validation segments, no noise and no dropout).
 """
 from __future__ import annotations
 
@@ -17,7 +23,7 @@ from torch import nn
 from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
 
 __all__ = ["G2VStages", "TrainedG2V", "train_gesture2vec", "generate_gesture2vec", "code_perplexity",
-           "WordTrack"]
+           "WordTrack", "latent_windows"]
 
 WordTrack = Sequence[tuple[np.ndarray, float]]   # (embedding, start time in seconds) per word
 
@@ -31,6 +37,8 @@ class G2VStages:
     learning_rate: float = 1e-3
     translation_learning_rate: float = 1e-3
     batch_size: int = 128
+    reset_dead_codes: bool = True        # codes unused in a VQ epoch restart at a random chunk's encoding
+    budget_shares: tuple[float, float, float] = (0.10, 0.45, 0.45)
 
 
 @dataclass
@@ -45,6 +53,7 @@ class TrainedG2V:
     code_counts: np.ndarray
     history: list[dict] = field(default_factory=list)
     train_chunks: dict[int, list[np.ndarray]] = field(default_factory=dict)  # for retrieval decoding
+    stopped: list[str] = field(default_factory=list)                         # stages cut by the budget
 
 
 def code_perplexity(counts: np.ndarray) -> float:
@@ -71,6 +80,20 @@ def _window_words(words: WordTrack, start: float, length: float, text_dim: int) 
     return np.asarray(rows, np.float32).reshape(-1, text_dim + 1)
 
 
+def _aligned(words: WordTrack, start: float, chunk_s: float, n: int, text_dim: int) -> np.ndarray:
+    """(n, 2 (text_dim + 1)): per chunk k of a window, the mean (embedding, position in the chunk) of the words
+    starting in chunk k, then of those starting in chunk k - 1 (zeros without words)."""
+    out = np.zeros((n + 1, text_dim + 1), np.float32)     # row j: chunk j - 1 (row 0: the chunk before the window)
+    count = np.zeros(n + 1)
+    for emb, t in words:
+        j = int(np.floor((t - start) / chunk_s)) + 1
+        if 0 <= j <= n:
+            out[j] += np.concatenate([emb, [(t - start) / chunk_s - (j - 1)]])
+            count[j] += 1
+    out /= np.maximum(count, 1)[:, None]
+    return np.concatenate([out[1:], out[:-1]], axis=1)
+
+
 def _pad_words(items: list[np.ndarray], text_dim: int) -> tuple[torch.Tensor, torch.Tensor]:
     width = max(1, max(len(w) for w in items))
     x = np.zeros((len(items), width, text_dim + 1), np.float32)
@@ -83,13 +106,40 @@ def _pad_words(items: list[np.ndarray], text_dim: int) -> tuple[torch.Tensor, to
     return torch.from_numpy(x), torch.from_numpy(mask)
 
 
+def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequence[WordTrack], c: G2VConfig,
+                       fps: float, norm: Sequence[np.ndarray] | None = None,
+                       pool: dict[int, list[np.ndarray]] | None = None
+                       ) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """Word windows and the codes of their non-overlapping chunks (and, with ``pool``, each code's clips)."""
+    win = c.chunk * c.chunks_per_window
+    srcs: list[np.ndarray] = []
+    tgts: list[np.ndarray] = []
+    aligned: list[np.ndarray] = []
+    with torch.no_grad():
+        for i, (lat, track) in enumerate(zip(latents, words)):
+            for s in range(0, len(lat) - win + 1, c.chunk):
+                feats = _latent_chunks(lat[s:s + win], c.chunk, c.chunk)
+                codes = vq.quantise(vq.encode(torch.from_numpy(feats.astype(np.float32)))).numpy()
+                srcs.append(_window_words(track, s / fps, win / fps, c.text_dim))
+                aligned.append(_aligned(track, s / fps, c.chunk / fps, c.chunks_per_window, c.text_dim))
+                tgts.append(codes)
+                if pool is not None and norm is not None:
+                    for k, code in enumerate(codes):
+                        pool.setdefault(int(code), []).append(norm[i][s + k * c.chunk:s + (k + 1) * c.chunk])
+    return srcs, tgts, aligned
+
+
 def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], config: G2VConfig, fps: float,
                       stages: G2VStages = G2VStages(), *, seed: int = 0,
+                      val_poses: Sequence[np.ndarray] = (), val_words: Sequence[WordTrack] = (),
+                      budget_seconds: float | None = None,
                       on_epoch: Callable[[dict], None] | None = None) -> TrainedG2V:
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     history: list[dict] = []
+    stopped: list[str] = []
     start_time = time.perf_counter()
+    shares = np.cumsum(stages.budget_shares) / sum(stages.budget_shares)
 
     def log(record: dict) -> None:
         record["seconds"] = time.perf_counter() - start_time
@@ -97,13 +147,22 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         if on_epoch is not None:
             on_epoch(record)
 
+    def out_of_time(stage: int, record: dict, name: str) -> bool:
+        if budget_seconds is None or time.perf_counter() - start_time < budget_seconds * shares[stage]:
+            return False
+        record["stopped"] = "time budget"
+        stopped.append(name)
+        return True
+
     allp = np.concatenate(poses)
     mean = allp.mean(0)
     scale = np.maximum(np.abs(allp - mean).max(0), 1e-6)  # mean 0, max |x| 1 (paper §4.1)
     norm = [((p - mean) / scale).astype(np.float32) for p in poses]
+    vnorm = [((p - mean) / scale).astype(np.float32) for p in val_poses]
     # 1. frame autoencoder
     dae = FrameDAE(config)
     x = torch.from_numpy(np.concatenate(norm))
+    vx = torch.from_numpy(np.concatenate(vnorm)) if vnorm else None
     opt = torch.optim.Adam(dae.parameters(), lr=stages.learning_rate)
     for epoch in range(stages.dae_epochs):
         dae.train()
@@ -114,22 +173,35 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             loss.backward()
             opt.step()
             total += loss.item() * len(idx)
-        log({"stage": "frame autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)})
+        rec: dict = {"stage": "frame autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)}
+        if vx is not None:
+            dae.eval()
+            with torch.no_grad():
+                rec["val_loss"] = nn.functional.mse_loss(dae(vx), vx).item()
+        stop = out_of_time(0, rec, "frame autoencoder")
+        log(rec)
+        if stop:
+            break
     dae.eval()
     with torch.no_grad():
         latents = [dae.encoder(torch.from_numpy(p)).numpy() for p in norm]
+        vlatents = [dae.encoder(torch.from_numpy(p)).numpy() for p in vnorm]
     # 2. VQ-DVAE, then its decoder alone
     chunks = np.concatenate([_latent_chunks(lat, config.chunk, config.stride) for lat in latents])
     if not len(chunks):
         raise ValueError(f"no segment has {config.chunk} frames for a VQ-DVAE chunk")
     ct = torch.from_numpy(chunks.astype(np.float32))
+    vchunks = [_latent_chunks(lat, config.chunk, config.stride) for lat in vlatents]
+    vct = torch.from_numpy(np.concatenate(vchunks).astype(np.float32)) if sum(map(len, vchunks)) else None
     vq = VQDVAE(config)
     # start the codebook from encoder outputs of random chunks, so that no code starts unused
     with torch.no_grad():
         z0 = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), config.codebook, replace=len(ct) < config.codebook))])
         vq.codebook.weight.copy_(z0 + 0.01 * torch.randn_like(z0))
     opt = torch.optim.Adam(vq.parameters(), lr=stages.learning_rate)
-    for epoch in range(stages.vq_epochs + stages.vq_decoder_epochs):
+    total_vq = stages.vq_epochs + stages.vq_decoder_epochs
+    epoch = 0
+    while epoch < total_vq:
         decoder_only = epoch >= stages.vq_epochs
         if decoder_only and epoch == stages.vq_epochs:
             for p in [*vq.encoder.parameters(), *vq.codebook.parameters()]:
@@ -145,43 +217,76 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             opt.step()
             total += loss.item() * len(idx)
             counts += np.bincount(codes.numpy(), minlength=config.codebook)
-        log({"stage": "vq-dvae decoder" if decoder_only else "vq-dvae", "epoch": epoch + 1,
-             "train_loss": total / len(ct), "perplexity": code_perplexity(counts)})
+        if stages.reset_dead_codes and not decoder_only and epoch < stages.vq_epochs - 1:
+            dead = np.flatnonzero(counts == 0)
+            if len(dead):
+                with torch.no_grad():
+                    z = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), len(dead), replace=len(ct) < len(dead)))])
+                    vq.codebook.weight[torch.from_numpy(dead)] = z + 0.01 * torch.randn_like(z)
+        stage = "vq-dvae decoder" if decoder_only else "vq-dvae"
+        rec = {"stage": stage, "epoch": epoch + 1,
+               "train_loss": total / len(ct), "perplexity": code_perplexity(counts)}
+        if vct is not None:
+            vq.eval()
+            with torch.no_grad():
+                recon, _, vq_loss = vq(vct)
+                rec["val_loss"] = (nn.functional.mse_loss(recon, vct) + (0 if decoder_only else vq_loss)).item()
+        if out_of_time(1, rec, stage):
+            # out of time: a cut encoder stage still gets one decoder epoch (the decoder must fit the codes)
+            epoch = stages.vq_epochs - 1 if not decoder_only and stages.vq_decoder_epochs else total_vq
+        log(rec)
+        epoch += 1
     vq.eval()
     # 3. translation: word windows -> codes of the window's non-overlapping chunks
-    win = config.chunk * config.chunks_per_window
-    srcs: list[np.ndarray] = []
-    tgts: list[np.ndarray] = []
     train_chunks: dict[int, list[np.ndarray]] = {}
-    with torch.no_grad():
-        for lat, track, p in zip(latents, words, norm):
-            for s in range(0, len(lat) - win + 1, config.chunk):
-                feats = _latent_chunks(lat[s:s + win], config.chunk, config.chunk)
-                codes = vq.quantise(vq.encode(torch.from_numpy(feats.astype(np.float32)))).numpy()
-                srcs.append(_window_words(track, s / fps, win / fps, config.text_dim))
-                tgts.append(codes)
-                for k, code in enumerate(codes):
-                    train_chunks.setdefault(int(code), []).append(p[s + k * config.chunk:s + (k + 1) * config.chunk])
+    srcs, tgts, al = _translation_pairs(vq, latents, words, config, fps, norm, train_chunks)
+    vsrcs, vtgts, val_al = _translation_pairs(vq, vlatents, val_words, config, fps)
     if not srcs:
-        raise ValueError(f"no segment has {win} frames for a translation window")
+        raise ValueError(f"no segment has {config.chunk * config.chunks_per_window} frames for a translation window")
     code_counts = np.bincount(np.concatenate(tgts), minlength=config.codebook)
     translator = Translator(config)
     opt = torch.optim.Adam(translator.parameters(), lr=stages.translation_learning_rate)
     targets = torch.from_numpy(np.stack(tgts).astype(np.int64))
+    al_t = torch.from_numpy(np.stack(al))
+    ce = nn.functional.cross_entropy
     for epoch in range(stages.translation_epochs):
         translator.train()
         total = 0.0
         for idx in _batches(len(srcs), stages.batch_size, rng):
             wx, mask = _pad_words([srcs[i] for i in idx.tolist()], config.text_dim)
-            logits = translator(wx, mask, targets[idx])
-            loss = nn.functional.cross_entropy(logits.reshape(-1, config.codebook), targets[idx].reshape(-1))
+            logits = translator(wx, mask, targets[idx], al_t[idx])
+            loss = ce(logits.reshape(-1, config.codebook), targets[idx].reshape(-1))
             opt.zero_grad()
             loss.backward()
             opt.step()
             total += loss.item() * len(idx)
-        log({"stage": "translation", "epoch": epoch + 1, "train_loss": total / len(srcs)})
+        rec = {"stage": "translation", "epoch": epoch + 1, "train_loss": total / len(srcs)}
+        if vsrcs:
+            translator.eval()
+            with torch.no_grad():
+                wx, mask = _pad_words(vsrcs, config.text_dim)
+                vt = torch.from_numpy(np.stack(vtgts).astype(np.int64))
+                logits = translator(wx, mask, vt, torch.from_numpy(np.stack(val_al)))
+                rec["val_loss"] = ce(logits.reshape(-1, config.codebook), vt.reshape(-1)).item()
+        stop = out_of_time(2, rec, "translation")
+        log(rec)
+        if stop:
+            break
     translator.eval()
-    return TrainedG2V(config, fps, dae, vq, translator, mean, scale, code_counts, history, train_chunks)
+    return TrainedG2V(config, fps, dae, vq, translator, mean, scale, code_counts, history, train_chunks, stopped)
+
+
+@torch.no_grad()
+def latent_windows(model: TrainedG2V, poses: np.ndarray, stride: int | None = None) -> np.ndarray:
+    """The VQ-DVAE encoder's continuous output z (before quantisation) of every ``chunk``-frame window of one
+    pose sequence (T, D), every ``stride`` frames (default the model's): (N, 2 * vq_hidden)."""
+    c = model.config
+    norm = ((np.asarray(poses) - model.pose_mean) / model.pose_scale).astype(np.float32)
+    lat = model.dae.encoder(torch.from_numpy(norm)).numpy()
+    feats = _latent_chunks(lat, c.chunk, stride or c.stride)
+    if not len(feats):
+        return np.zeros((0, model.vq.code_dim), np.float32)
+    return model.vq.encode(torch.from_numpy(feats.astype(np.float32))).numpy()
 
 
 @torch.no_grad()
@@ -198,7 +303,10 @@ def generate_gesture2vec(model: TrainedG2V, words: WordTrack, n_frames: int, *, 
     rng = np.random.default_rng(seed)
     srcs = [_window_words(words, w * win / model.fps, win / model.fps, c.text_dim) for w in range(n_windows)]
     wx, mask = _pad_words(srcs, c.text_dim)
-    codes = model.translator.generate(wx, mask, c.chunks_per_window, gen, temperature).reshape(-1)
+    al = np.stack([_aligned(words, w * win / model.fps, c.chunk / model.fps, c.chunks_per_window, c.text_dim)
+                   for w in range(n_windows)])
+    codes = model.translator.generate(wx, mask, c.chunks_per_window, gen, temperature,
+                                      torch.from_numpy(al)).reshape(-1)
     if retrieval:
         pieces = []
         for code in codes.tolist():

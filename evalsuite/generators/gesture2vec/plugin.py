@@ -1,0 +1,241 @@
+"""``gesture2vec``: the re-implementation of Yazdian, Chen and Lim (IROS 2022) as a trainable plug-in.
+
+Text only, as the paper: the word vectors of the transcript with their timings -> a translation model (BiGRU
+encoder, attention GRU decoder) -> one code of a K-vector codebook per 30-frame chunk -> the VQ-DVAE decoder ->
+the frame autoencoder's decoder -> joint rotations (3x3 matrices of the GENEA 2020 upper-body joints of the
+corpus's skeleton) at 20 fps, written as BVH. ``decoding=retrieval`` is the original repository's decoding
+(a random training clip of each predicted code, seeded); every output file's ``meta`` in ``generation.json``
+says which decoding made it (``retrieval: true|false``) and lists its codes.
+
+Codebook statistics: the model folder keeps ``code_counts.npy`` (codes of the training chunks) and
+:func:`code_usage` reads a generation folder's codes back and compares their histogram with it
+(``evalsuite.learned.latent.hellinger`` / ``perplexity``, the NSD / codebook-diversity metrics' formulas).
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from evalsuite.corpus.types import Corpus, Transcript
+from evalsuite.generators.contract import (
+    GenerationRequest,
+    GenerationResult,
+    Generator,
+    GeneratorError,
+    GeneratorSpec,
+    TrainingResult,
+)
+from evalsuite.generators.gesture2vec.info import DEVIATIONS as CORE_DEVIATIONS
+from evalsuite.generators.pose_repr import PoseRepresentation
+from evalsuite.generators.reimpl import (
+    budget_seconds,
+    load_state,
+    read_json,
+    save_state,
+    splits_for_training,
+    torch_setup,
+    weights_sha256,
+    write_json,
+)
+
+__all__ = ["Gesture2Vec", "code_usage", "SIZES"]
+
+# the paper's sizes (§4) and a CPU preset (fewer recurrent units and layers)
+SIZES: dict[str, dict[str, int]] = {
+    "paper": {"latent_dim": 40, "vq_hidden": 200, "vq_layers": 2, "text_hidden": 200},
+    "cpu": {"latent_dim": 40, "vq_hidden": 96, "vq_layers": 1, "text_hidden": 96},
+}
+WORDS_OPTION = ("word vectors: 'minilm-static' (default: all-MiniLM-L6-v2 static word vectors, offline from the "
+                "text extra), 'minilm' (contextual), 'hash' (no model, no meaning), 'bert:FOLDER', "
+                "'fasttext:FILE.vec' (the paper's FastText crawl-300d-2M vectors in .vec form)")
+MY_DEVIATIONS = (
+    "Sizes: the cpu preset (default) has 96 recurrent units and one layer in the VQ-DVAE and the translation "
+    "model (paper: 200 units, 2 layers); size=paper restores them. Stage epochs are compressed (defaults "
+    "DAE 10, VQ-DVAE 15 + decoder 10, translation 60; paper's repository: 20-30, 3000, 250) and a time budget "
+    "stops the stages in order.",
+    "Codes unused in a VQ-DVAE epoch restart at the encoding of a random training chunk (dead-code reset; "
+    "the paper reports no collapse handling), so that small corpora use the codebook.",
+    "Translation windows are 4 chunks (120 frames at 20 fps, the repository's sentence_frame_length) cut every "
+    "chunk from the transcript's word timings; the paper aligned its words with Gentle.",
+)
+
+
+def _word_track(transcript: Transcript | None, embedder: Any) -> list[tuple[np.ndarray, float]]:
+    words = list(transcript.words) if transcript is not None else []
+    if not words:
+        return []
+    vectors = embedder.embed([w.text for w in words])
+    return [(np.asarray(v, np.float32), float(w.start)) for v, w in zip(vectors, words)]
+
+
+class Gesture2Vec(Generator):
+    spec = GeneratorSpec(
+        name="gesture2vec", version="1", kind="re-implementation",
+        summary="Re-implementation of Gesture2Vec (not the published system): text -> translation model -> codes "
+                "of a VQ-DVAE codebook per 30-frame chunk -> VQ-DVAE decoder -> frame autoencoder decoder -> "
+                "joint rotations at 20 fps; text only, as the paper (audio is not read).",
+        citation="Yazdian, Chen, Lim (2022). Gesture2Vec: Clustering gestures using representation learning "
+                 "methods for co-speech gesture generation. IROS 2022.",
+        license="MIT (this re-implementation, written from the paper; the original repository is MIT and is not "
+                "used)",
+        audio="none", transcript="required", word_timings="required", native_fps=20.0, output="bvh",
+        skeleton="the training corpus's skeleton (GENEA 2020 upper-body joints as 3x3 rotation matrices)",
+        units="cm", trainable=True, needs_model=True, extra="learned, text",
+        config={"words": WORDS_OPTION,
+                "decoding": "generative (default: codes -> VQ-DVAE decoder -> frame decoder, deterministic) or "
+                            "retrieval (the original repository's: a random training clip of each code, seeded; "
+                            "flagged in generation.json)",
+                "temperature": "sampling temperature of the translation decoder (default 0: greedy)",
+                "codebook": "K, codes in the codebook (default 300, the paper's)",
+                "chunk": "frames per VQ-DVAE chunk (default 30, the paper's)",
+                "stride": "frames between training chunks (default 10, the paper's)",
+                "size": "cpu (default: 96 units, 1 layer) or paper (200 units, 2 layers)",
+                "dae_epochs": "frame autoencoder epochs (default 10; paper 20)",
+                "vq_epochs": "VQ-DVAE epochs (default 15; paper 20)",
+                "vq_decoder_epochs": "VQ-DVAE decoder-only epochs (default 10; paper 20)",
+                "translation_epochs": "translation epochs (default 60; repository 250)",
+                "batch_size": "chunks / windows per batch (default 128, the repository's)",
+                "learning_rate": "Adam, all stages (default 1e-3, the paper's for the DAE)",
+                "reset_dead_codes": "true (default) or false: restart unused codes in VQ-DVAE training",
+                "aligned": "true (default): the translation decoder also reads the words of its chunk and the one "
+                           "before; false: attention alone (the paper's)",
+                "threads": "torch threads (default 1)"},
+        deviations=CORE_DEVIATIONS + MY_DEVIATIONS)
+
+    # -- options -------------------------------------------------------------------------------------------
+    def _settings(self) -> dict[str, Any]:
+        size = str(self.option("size", "cpu"))
+        if size not in SIZES:
+            raise GeneratorError(f"size must be one of {', '.join(SIZES)}, got {size!r}", field="size")
+        decoding = str(self.option("decoding", "generative"))
+        if decoding not in ("generative", "retrieval"):
+            raise GeneratorError(f"decoding must be generative or retrieval, got {decoding!r}", field="decoding")
+        st: dict[str, Any] = {"size": size, "decoding": decoding, "words": str(self.option("words", "minilm-static")),
+              "temperature": float(self.option("temperature", 0.0)), "codebook": int(self.option("codebook", 300)),
+              "chunk": int(self.option("chunk", 30)), "stride": int(self.option("stride", 10)),
+              "dae_epochs": int(self.option("dae_epochs", 10)), "vq_epochs": int(self.option("vq_epochs", 15)),
+              "vq_decoder_epochs": int(self.option("vq_decoder_epochs", 10)),
+              "translation_epochs": int(self.option("translation_epochs", 60)),
+              "batch_size": int(self.option("batch_size", 128)),
+              "learning_rate": float(self.option("learning_rate", 1e-3)),
+              "reset_dead_codes": str(self.option("reset_dead_codes", True)).lower() in ("true", "1", "yes"),
+              "aligned": str(self.option("aligned", True)).lower() in ("true", "1", "yes"),
+              "threads": int(self.option("threads", 1))}
+        for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
+            if st[name] < 1:
+                raise GeneratorError(f"{name} must be a positive integer, got {st[name]}", field=name)
+        if st["temperature"] < 0:
+            raise GeneratorError(f"temperature must be >= 0, got {st['temperature']}", field="temperature")
+        return st
+
+    @property
+    def stochastic(self) -> bool:
+        st = self.config
+        return str(st.get("decoding", "generative")) == "retrieval" or float(st.get("temperature", 0.0)) > 0
+
+    # -- training ------------------------------------------------------------------------------------------
+    def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
+            progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
+        from evalsuite.features.embeddings import get_embedder
+        from evalsuite.generators.gesture2vec.net import G2VConfig
+        from evalsuite.generators.gesture2vec.training import G2VStages, code_perplexity, train_gesture2vec
+
+        st = self._settings()
+        torch_setup(seed, st["threads"])
+        train, val = splits_for_training(corpus)
+        rep = PoseRepresentation.from_motion(train[0].load_motion(), "rotmat")
+        embedder = get_embedder(st["words"])
+        poses = [rep.encode(s.load_motion()) for s in train]
+        words = [_word_track(s.transcript, embedder) for s in train]
+        vposes = [rep.encode(s.load_motion()) for s in val]
+        vwords = [_word_track(s.transcript, embedder) for s in val]
+        config = G2VConfig(pose_dim=rep.dim, text_dim=embedder.dim, chunk=st["chunk"], stride=st["stride"],
+                           codebook=st["codebook"], aligned=st["aligned"], **SIZES[st["size"]])
+        stages = G2VStages(dae_epochs=st["dae_epochs"], vq_epochs=st["vq_epochs"],
+                           vq_decoder_epochs=st["vq_decoder_epochs"], translation_epochs=st["translation_epochs"],
+                           learning_rate=st["learning_rate"], translation_learning_rate=st["learning_rate"],
+                           batch_size=st["batch_size"], reset_dead_codes=st["reset_dead_codes"])
+        model = train_gesture2vec(poses, words, config, rep.fps, stages, seed=seed, val_poses=vposes,
+                                  val_words=vwords, budget_seconds=budget_seconds(budget_minutes), on_epoch=progress)
+        rep.save(out_dir)
+        shas = {name: save_state(out_dir, f"{name}.pt", net)
+                for name, net in (("dae", model.dae), ("vqdvae", model.vq), ("translator", model.translator))}
+        np.savez(out_dir / "normalisers.npz", pose_mean=model.pose_mean, pose_scale=model.pose_scale)
+        np.save(out_dir / "code_counts.npy", model.code_counts)
+        pool = {f"code_{k}": np.stack(v) for k, v in model.train_chunks.items()}
+        np.savez(out_dir / "retrieval_pool.npz", **pool)  # type: ignore[arg-type]
+        write_json(out_dir / "settings.json", {**st, "net": config.to_dict(), "fps": rep.fps,
+                                               "text_dim": embedder.dim})
+        states = {f"{name}.{k}": v for name, net in (("dae", model.dae), ("vqdvae", model.vq),
+                                                     ("translator", model.translator))
+                  for k, v in net.state_dict().items()}
+        meta = {"weights_sha256": weights_sha256(states), "weights_sha256_parts": shas,
+                "train_segments": len(train), "val_segments": len(val),
+                "code_perplexity": code_perplexity(model.code_counts), "codes_used": int((model.code_counts > 0).sum()),
+                "codebook": st["codebook"], "stopped_by_budget": model.stopped}
+        return TrainingResult(out_dir, model.history, meta)
+
+    # -- generation ----------------------------------------------------------------------------------------
+    def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
+        super().load(config, model_dir)
+        from evalsuite.features.embeddings import get_embedder
+        from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
+        from evalsuite.generators.gesture2vec.training import TrainedG2V
+
+        assert model_dir is not None
+        saved = read_json(model_dir / "settings.json")
+        torch_setup(0, int(saved.get("threads", 1)))
+        self.saved = saved
+        self.rep = PoseRepresentation.load(model_dir)
+        c = G2VConfig(**saved["net"])
+        nets = {"dae": FrameDAE(c), "vqdvae": VQDVAE(c), "translator": Translator(c)}
+        for name, net in nets.items():
+            load_state(model_dir, f"{name}.pt", net)
+        norms = np.load(model_dir / "normalisers.npz")
+        pool = {int(k.split("_")[1]): list(v) for k, v in np.load(model_dir / "retrieval_pool.npz").items()}
+        self.model = TrainedG2V(c, float(saved["fps"]), nets["dae"], nets["vqdvae"],  # type: ignore[arg-type]
+                                nets["translator"], norms["pose_mean"], norms["pose_scale"],  # type: ignore[arg-type]
+                                np.load(model_dir / "code_counts.npy"), [], pool)
+        self.embedder = get_embedder(saved["words"])
+        # generation options may differ from training's; the model's own settings are the defaults
+        self.decoding = str(self.option("decoding", "generative"))
+        if self.decoding not in ("generative", "retrieval"):
+            raise GeneratorError(f"decoding must be generative or retrieval, got {self.decoding!r}", field="decoding")
+        self.temperature = float(self.option("temperature", 0.0))
+
+    def generate(self, request: GenerationRequest) -> GenerationResult:
+        from evalsuite.generators.gesture2vec.training import generate_gesture2vec
+
+        if request.transcript is None or not len(request.transcript):
+            raise GeneratorError(f"{self.spec.name}, segment {request.segment_id!r}: needs a transcript with word "
+                                 f"timings (it reads text only)")
+        n = int(round(request.duration * self.rep.fps))
+        poses, codes = generate_gesture2vec(self.model, _word_track(request.transcript, self.embedder), n,
+                                            seed=request.seed, temperature=self.temperature,
+                                            retrieval=self.decoding == "retrieval")
+        meta = {"decoding": self.decoding, "retrieval": self.decoding == "retrieval",
+                "codes": [int(k) for k in codes], "chunk_frames": self.model.config.chunk}
+        return GenerationResult(self.rep.decode(poses), meta)
+
+    def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
+        return [self.generate(r) for r in requests]
+
+
+def code_usage(generation_dir: str | pathlib.Path, model_dir: str | pathlib.Path) -> dict[str, float]:
+    """Codebook statistics of a ``gesture2vec`` run: the codes listed in ``generation.json`` (per file meta)
+    against the model's training code counts (``code_counts.npy``): ``codebook_hellinger`` (0 = the same
+    usage as training), ``codebook_perplexity`` (generated), ``training_perplexity``, ``codes_used``."""
+    from evalsuite.learned.latent import hellinger, perplexity
+
+    record = json.loads((pathlib.Path(generation_dir) / "generation.json").read_text(encoding="utf-8"))
+    train_counts = np.load(pathlib.Path(model_dir) / "code_counts.npy").astype(np.float64)
+    codes = [k for f in record["files"] for k in (f.get("meta") or {}).get("codes", [])]
+    if not codes:
+        raise GeneratorError("generation.json lists no codes: not a gesture2vec run", field="generation_dir")
+    counts = np.bincount(codes, minlength=len(train_counts)).astype(np.float64)
+    return {"codebook_hellinger": hellinger(train_counts, counts), "codebook_perplexity": perplexity(counts),
+            "training_perplexity": perplexity(train_counts), "codes_used": float((counts > 0).sum())}

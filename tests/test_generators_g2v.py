@@ -1,0 +1,181 @@
+"""gesture2vec: spec, model folder, decoding options, and issue 15's learning criteria on a small synthetic corpus.
+
+CI budget: the criteria test trains on the ~6-minute corpus of ``g2v_mogan_helpers`` with a codebook of K = 48
+(the criterion is relative: perplexity above 0.3 K) and compressed epochs (about a minute on 2 cores); the
+30-minute benchmark (benchmarks/bench_generators_g2v_mogan.py) uses the defaults (K = 300).
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from g2v_mogan_helpers import natural_scores, synth_corpus
+
+from evalsuite.cli import main
+from evalsuite.generators import GeneratorError, find_generator
+
+CONFIG = {"codebook": 48, "dae_epochs": 10, "vq_epochs": 12, "vq_decoder_epochs": 6, "translation_epochs": 40}
+
+
+def test_spec_is_text_only_and_info_lists_citation_licence_deviations():
+    entry = find_generator("gesture2vec")
+    spec = entry.spec
+    assert (spec.audio, spec.transcript, spec.word_timings) == ("none", "required", "required")
+    assert spec.native_fps == 20.0 and spec.output == "bvh" and spec.trainable and spec.needs_model
+    from evalsuite.generators.gesture2vec.info import DEVIATIONS
+
+    assert spec.deviations[:len(DEVIATIONS)] == DEVIATIONS
+    out = CliRunner().invoke(main, ["generators", "info", "gesture2vec"])
+    assert out.exit_code == 0, out.output
+    for text in ("Yazdian", "IROS 2022", "MIT", "retrieval", "rotation", "FastText"):
+        assert text in out.output
+    code = "import sys, evalsuite.generators.gesture2vec.plugin; print('torch' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout.strip() == "False"
+
+
+def test_bad_options_are_named():
+    from evalsuite.generators.gesture2vec.plugin import Gesture2Vec
+
+    g = Gesture2Vec()
+    g.configure({"decoding": "nearest"})
+    with pytest.raises(GeneratorError, match="decoding must be generative or retrieval"):
+        g._settings()
+    g.configure({"size": "huge"})
+    with pytest.raises(GeneratorError, match="size must be one of paper, cpu"):
+        g._settings()
+
+
+@pytest.mark.slow
+def test_training_twice_with_one_seed_gives_identical_weights(tmp_path):
+    from evalsuite.generators.checking import tiny_corpus
+    from evalsuite.generators.training import train
+
+    corpus = tiny_corpus(tmp_path / "tiny", n_segments=6, seconds=8.0)
+    entry = find_generator("gesture2vec")
+    cfg = {"words": "hash", "codebook": 8, "dae_epochs": 2, "vq_epochs": 2, "vq_decoder_epochs": 1,
+           "translation_epochs": 2}
+    shas = [train(entry, corpus, tmp_path / f"m{i}", seed=5, config=cfg, progress=False).meta["weights_sha256"]
+            for i in range(2)]
+    assert shas[0] == shas[1]
+    other = train(entry, corpus, tmp_path / "m2", seed=6, config=cfg, progress=False).meta["weights_sha256"]
+    assert other != shas[0]
+    record = json.loads((tmp_path / "m0" / "model.json").read_text())
+    assert record["weights_sha256"] == shas[0]
+    for name in ("dae.pt", "vqdvae.pt", "translator.pt", "normalisers.npz", "code_counts.npy",
+                 "retrieval_pool.npz", "settings.json", "representation.json", "template.bvh"):
+        assert name in record["files"]
+
+
+def test_budget_stops_the_stages_in_order(tmp_path):
+    from evalsuite.generators.checking import tiny_corpus
+    from evalsuite.generators.training import train
+
+    corpus = tiny_corpus(tmp_path / "tiny", n_segments=6, seconds=8.0)
+    cfg = {"words": "hash", "codebook": 8, "dae_epochs": 100000, "vq_epochs": 100000, "vq_decoder_epochs": 100000,
+           "translation_epochs": 100000}
+    res = train(find_generator("gesture2vec"), corpus, tmp_path / "m", seed=0, budget_minutes=0.05, config=cfg,
+                progress=False)
+    stages = [r["stage"] for r in res.history]
+    assert stages[0] == "frame autoencoder" and stages[-1] == "translation"
+    assert "vq-dvae decoder" in stages  # a cut encoder stage still gets a decoder epoch
+    assert res.meta["stopped_by_budget"][0] == "frame autoencoder"
+    assert [r for r in res.history if r.get("stopped")], "the history says where the budget stopped a stage"
+    assert all("val_loss" in r for r in res.history)
+    assert res.history[-1]["seconds"] < 0.05 * 60 + 10
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    """gesture2vec trained once on the small synthetic corpus, and its test split generated."""
+    from evalsuite.generators.requests import requests_from_corpus
+    from evalsuite.generators.runner import generate
+    from evalsuite.generators.training import train
+
+    corpus = synth_corpus()
+    root = tmp_path_factory.mktemp("g2v")
+    entry = find_generator("gesture2vec")
+    res = train(entry, corpus, root / "model", seed=0, config=CONFIG, progress=False)
+    reqs = requests_from_corpus(corpus, "test", 20.0)
+    generate(entry, reqs, root / "gen", model_dir=root / "model", seed=0, progress=False)
+    return corpus, root, res, reqs
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="issue 15 criterion not met yet: on the 6-minute corpus even the natural "
+                                       "motion's own codes, decoded, keep only 30-40 % of its lexical contrast "
+                                       "(the VQ-DVAE is the bottleneck); see docs/generators.md")
+def test_lexical_contrast_at_least_half_the_natural_motions(trained):
+    from evalsuite.generators.evaluation import evaluate_condition
+
+    corpus, root, _, _ = trained
+    scores = evaluate_condition(root / "gen", corpus, "test")
+    oracle = natural_scores(corpus)
+    print("gesture2vec lexical_mean", scores["lexical_mean"], "natural", oracle["lexical_mean"])
+    assert scores["lexical_mean"] >= 0.5 * oracle["lexical_mean"], (scores, oracle)
+
+
+@pytest.mark.slow
+def test_codebook_is_used_and_its_statistics_reach_the_codebook_metrics(trained):
+    from evalsuite.generators.gesture2vec.plugin import code_usage
+
+    _, root, res, _ = trained
+    print("gesture2vec code perplexity", res.meta["code_perplexity"], "of K =", CONFIG["codebook"])
+    assert res.meta["code_perplexity"] > 0.3 * CONFIG["codebook"], res.meta   # no collapse
+    usage = code_usage(root / "gen", root / "model")
+    counts = np.load(root / "model" / "code_counts.npy")
+    assert len(counts) == CONFIG["codebook"] and counts.sum() > 0
+    assert 0.0 <= usage["codebook_hellinger"] <= 1.0 and usage["codes_used"] >= 2
+    assert usage["training_perplexity"] == pytest.approx(res.meta["code_perplexity"], rel=1e-6)
+
+
+@pytest.mark.slow
+def test_latent_nsd_lower_than_a_shuffled_control(trained):
+    from evalsuite.generators import criteria as C
+    from evalsuite.generators.gesture2vec.plugin import Gesture2Vec
+    from evalsuite.generators.gesture2vec.training import latent_windows
+
+    corpus, root, _, _ = trained
+    g = Gesture2Vec()
+    g.load({}, root / "model")
+    lat = [latent_windows(g.model, g.rep.encode(s.load_motion())) for s in corpus.split("test")]
+    nsd = C.latent_nsd(lat)
+    print("gesture2vec latent NSD", nsd)
+    assert nsd["nsd"] < nsd["nsd_shuffled"], nsd
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="issue 15 criterion not met yet: FGD 2789 against mean_pose's 1705 on the "
+                                       "6-minute corpus; the frame autoencoder's own reconstruction of natural motion "
+                                       "scores 7523 (small static errors in near-motionless joints, amplified by the "
+                                       "encoder's per-dimension normalisation); see docs/generators.md")
+def test_heldout_fgd_lower_than_mean_pose(trained):
+    from evalsuite.generators import criteria as C
+    from evalsuite.generators.runner import generate
+
+    corpus, root, _, reqs = trained
+    generate(find_generator("mean_pose"), reqs, root / "mean_pose", seed=0, progress=False)
+    fgd = C.fgd_against_natural(corpus, {"gesture2vec": C.generated_motions(root / "gen", corpus),
+                                         "mean_pose": C.generated_motions(root / "mean_pose", corpus)})
+    print("FGD against held-out natural", fgd)
+    assert fgd["gesture2vec"] < fgd["mean_pose"], fgd
+
+
+@pytest.mark.slow
+def test_retrieval_decoding_is_flagged_and_seeded(trained):
+    from evalsuite.generators.runner import generate
+
+    corpus, root, _, reqs = trained
+    entry = find_generator("gesture2vec")
+    generate(entry, reqs, root / "retr", model_dir=root / "model", seed=0, config={"decoding": "retrieval"},
+             samples=2, progress=False)
+    record = json.loads((root / "retr" / "generation.json").read_text())
+    assert all(f["meta"]["retrieval"] and f["meta"]["decoding"] == "retrieval" for f in record["files"])
+    assert record["files"][0]["sha256"] != record["files"][1]["sha256"]   # two samples, two clips
+    gen_record = json.loads((root / "gen" / "generation.json").read_text())
+    assert not any(f["meta"]["retrieval"] for f in gen_record["files"])
+    assert all(len(f["meta"]["codes"]) >= 1 for f in gen_record["files"])
