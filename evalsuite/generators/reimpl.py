@@ -21,7 +21,8 @@ from evalsuite.generators.contract import GenerationRequest, GeneratorError
 from evalsuite.generators.pose_repr import PoseRepresentation
 
 __all__ = ["SegmentArrays", "speech_features", "text_features", "corpus_arrays", "torch_setup", "weights_sha256",
-           "save_state", "load_state", "budget_seconds", "TEXT_OPTION", "request_arrays", "write_json", "read_json"]
+           "save_state", "load_state", "budget_seconds", "TEXT_OPTION", "request_arrays", "write_json", "read_json",
+           "open_model_folder", "splits_for_training"]
 
 TEXT_OPTION = ("word vectors: 'minilm' (default: all-MiniLM-L6-v2 from the text extra, contextual), "
                "'minilm-static', 'hash' (no model), 'bert:FOLDER', 'fasttext:FILE.vec'")
@@ -154,6 +155,16 @@ def read_json(path: pathlib.Path) -> Any:
         return json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         raise InputError(f"cannot read the model's settings ({exc})", path=path, field="--model") from None
+
+
+def open_model_folder(model_dir: pathlib.Path | None) -> tuple[dict[str, Any], PoseRepresentation]:
+    """A re-implementation's model folder: its ``settings.json`` and pose representation; torch set up with
+    the threads it was trained with (a clear message when torch is missing)."""
+    if model_dir is None:
+        raise GeneratorError("a model folder is needed (--model)", field="--model")
+    saved = read_json(model_dir / "settings.json")
+    torch_setup(0, int(saved.get("threads", 1)))
+    return saved, PoseRepresentation.load(model_dir)
 
 
 def splits_for_training(corpus: Corpus) -> tuple[tuple[Segment, ...], tuple[Segment, ...]]:

@@ -28,7 +28,7 @@ from evalsuite.generators.reimpl import (
     budget_seconds,
     corpus_arrays,
     load_state,
-    read_json,
+    open_model_folder,
     request_arrays,
     save_state,
     splits_for_training,
@@ -132,14 +132,12 @@ class _Aud2(Generator):
         from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
         from evalsuite.generators.aud2repr2pose.training import MaxAbsScaler, Standardiser, TrainedSystem
 
+        saved, rep = open_model_folder(model_dir)
         assert model_dir is not None
-        saved = read_json(model_dir / "settings.json")
         if saved.get("system") != self.system:
             raise GeneratorError(f"this model folder holds a {saved.get('system')} model, not {self.system}",
                                  field="--model")
-        torch_setup(0, int(saved.get("threads", 1)))
-        self.saved = saved
-        self.rep = PoseRepresentation.load(model_dir)
+        self.saved, self.rep = saved, rep
         net = SpeechNet(SpeechNetConfig(**saved["net"]))
         load_state(model_dir, "speech_net.pt", net)
         dae = None

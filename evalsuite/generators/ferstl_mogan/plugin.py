@@ -30,7 +30,7 @@ from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
     load_state,
-    read_json,
+    open_model_folder,
     request_arrays,
     save_state,
     speech_features,
@@ -181,11 +181,9 @@ class FerstlMogan(Generator):
         from evalsuite.generators.ferstl_mogan.net import MoganConfig, PhaseClassifier
         from evalsuite.generators.ferstl_mogan.training import TrainedMogan
 
+        self.saved, self.rep = open_model_folder(model_dir)
+        saved = self.saved
         assert model_dir is not None
-        saved = read_json(model_dir / "settings.json")
-        torch_setup(0, int(saved.get("threads", 1)))
-        self.saved = saved
-        self.rep = PoseRepresentation.load(model_dir)
         c = MoganConfig(**saved["net"])
         gen, clf = GeneratorNet(c), PhaseClassifier(c)
         load_state(model_dir, "generator.pt", gen)

@@ -29,7 +29,7 @@ from evalsuite.generators.reimpl import (
     budget_seconds,
     corpus_arrays,
     load_state,
-    read_json,
+    open_model_folder,
     request_arrays,
     save_state,
     splits_for_training,
@@ -125,14 +125,12 @@ class Gesticulator(Generator):
     # -- generation ----------------------------------------------------------------------------------------
     def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
         super().load(config, model_dir)
+        self.saved, self.rep = open_model_folder(model_dir)
+        saved = self.saved
         assert model_dir is not None
-        saved = read_json(model_dir / "settings.json")
-        torch_setup(0, int(saved.get("threads", 1)))
         from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
         from evalsuite.generators.gesticulator.training import Normaliser, TrainedGesticulator
 
-        self.saved = saved
-        self.rep = PoseRepresentation.load(model_dir)
         net = GesticulatorNet(GesticulatorConfig.from_dict(saved["net"]))
         load_state(model_dir, "gesticulator.pt", net)
         norms = np.load(model_dir / "normalisers.npz")

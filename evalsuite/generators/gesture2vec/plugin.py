@@ -34,7 +34,7 @@ from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
     load_state,
-    read_json,
+    open_model_folder,
     save_state,
     splits_for_training,
     torch_setup,
@@ -186,11 +186,9 @@ class Gesture2Vec(Generator):
         from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
         from evalsuite.generators.gesture2vec.training import TrainedG2V
 
+        self.saved, self.rep = open_model_folder(model_dir)
+        saved = self.saved
         assert model_dir is not None
-        saved = read_json(model_dir / "settings.json")
-        torch_setup(0, int(saved.get("threads", 1)))
-        self.saved = saved
-        self.rep = PoseRepresentation.load(model_dir)
         c = G2VConfig(**saved["net"])
         nets = {"dae": FrameDAE(c), "vqdvae": VQDVAE(c), "translator": Translator(c)}
         for name, net in nets.items():
