@@ -90,7 +90,7 @@ class FerstlMogan(Generator):
                                         "pre-training (default 40)",
                 "batch_size": "sequences of 100 frames per batch (default 16)",
                 "learning_rate": "Adam, classifier and pre-training (default 1e-3)",
-                "adversarial_learning_rate": "RMSprop (default 1e-4)",
+                "adversarial_learning_rate": "RMSprop (default 5e-4)",
                 "threads": "torch threads (default 1)"},
         deviations=CORE_DEVIATIONS + MY_DEVIATIONS)
 
@@ -111,7 +111,7 @@ class FerstlMogan(Generator):
                 "phase_pretrain_tries": int(self.option("phase_pretrain_tries", 40)),
                 "batch_size": int(self.option("batch_size", 16)),
                 "learning_rate": float(self.option("learning_rate", 1e-3)),
-                "adversarial_learning_rate": float(self.option("adversarial_learning_rate", 1e-4)),
+                "adversarial_learning_rate": float(self.option("adversarial_learning_rate", 5e-4)),
                 "threads": int(self.option("threads", 1))}
 
     # -- training ------------------------------------------------------------------------------------------
