@@ -19,6 +19,7 @@ Gesticulator used -15 in every dimension).
 """
 from __future__ import annotations
 
+import abc
 import hashlib
 import os
 import pathlib
@@ -36,14 +37,15 @@ __all__ = ["WordEmbedder", "HashEmbedder", "FastTextEmbedder", "ModelEmbedder", 
            "word_vectors"]
 
 
-class WordEmbedder:
+class WordEmbedder(abc.ABC):
     """Vectors for the words of a transcript, in order: ``embed(words) -> (n, dim)``."""
 
     name = "base"
     dim = 0
 
-    def embed(self, words: Sequence[str]) -> np.ndarray:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abc.abstractmethod
+    def embed(self, words: Sequence[str]) -> np.ndarray:
+        """``(n_words, dim)`` float vectors."""
 
 
 class HashEmbedder(WordEmbedder):
