@@ -18,9 +18,7 @@ Shapes: :func:`demo_features` -> ``(N, 30)``; :func:`demo_windows` -> ``(N, 61, 
 """
 from __future__ import annotations
 
-import logging
 import os
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,26 +36,11 @@ CONTEXT = 30                       # frames of context on each side (61-frame wi
 PAD_RATE = 44100                   # the original computes its padding row from a 44.1 kHz silence file
 
 
-class _TruncationNotice(logging.Filter):
-    """python_speech_features logs that each frame is longer than nfft: that truncation is the recipe."""
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        return "greater than FFT size" not in record.getMessage()
-
-
 def _mfcc(signal: np.ndarray, rate: int) -> np.ndarray:
-    try:
-        from python_speech_features import mfcc
-    except ImportError:  # pragma: no cover - a dependency of evalsuite
-        raise InputError("the demo recipe needs python_speech_features: pip install python-speech-features") from None
-    notice = _TruncationNotice()
-    logging.getLogger().addFilter(notice)
-    try:
-        with warnings.catch_warnings():   # python_speech_features calls the deprecated logging.warn
-            warnings.filterwarnings("ignore", "The 'warn' function is deprecated", DeprecationWarning)
-            return np.asarray(mfcc(signal, samplerate=rate, winlen=WINLEN, winstep=WINSTEP, numcep=NUMCEP))
-    finally:
-        logging.getLogger().removeFilter(notice)
+    # python_speech_features logs that each frame is longer than nfft: that truncation is the recipe
+    from evalsuite.features.mfcc import psf_mfcc
+
+    return psf_mfcc(signal, rate, winlen=WINLEN, winstep=WINSTEP, numcep=NUMCEP)
 
 
 def _mono_int16_wrap(raw: np.ndarray) -> np.ndarray:
