@@ -141,6 +141,11 @@ def simulate_results(seed: int = 2024) -> pd.DataFrame:
                 rows.append(_row(part, sess, status, page_id, ptype, trial, now, it, rng))
             trial += 1
             now += timedelta(seconds=40)
+    return results_frame(rows)
+
+
+def results_frame(rows: list[dict]) -> pd.DataFrame:
+    """Simulated rows as a results table: every results.csv column in order, and the simulation note."""
     df = pd.DataFrame(rows)
     for col in RESULTS_COLUMNS:
         if col not in df.columns:

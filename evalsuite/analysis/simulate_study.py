@@ -19,8 +19,7 @@ from datetime import datetime, timedelta, timezone
 import numpy as np
 import pandas as pd
 
-from evalsuite.analysis.io import RESULTS_COLUMNS
-from evalsuite.analysis.simulate import NOTE, _pairwise_answer
+from evalsuite.analysis.simulate import _pairwise_answer, results_frame
 
 __all__ = ["simulate_study"]
 
@@ -69,10 +68,4 @@ def simulate_study(quality: Mapping[str, float], segments: Sequence[str], *, par
                                          "segment": seg, "answer": ans, "strength": strength,
                                          "position_a": "left" if rng.random() < 0.5 else "right"}))
             trial += 1
-    df = pd.DataFrame(rows)
-    for col in RESULTS_COLUMNS:
-        if col not in df.columns:
-            df[col] = ""
-    df = df[list(RESULTS_COLUMNS)].fillna("")
-    df["data_note"] = NOTE
-    return df
+    return results_frame(rows)
