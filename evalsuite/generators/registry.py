@@ -47,6 +47,7 @@ BUILTIN: dict[str, str] = {
     "aud2repr2pose-demo": "evalsuite.generators.aud2repr2pose_demo.plugin:Aud2Repr2PoseDemoGenerator",
     # adapters
     "external": "evalsuite.generators.bridge:ExternalCommand",
+    "gesticulator-original": "evalsuite.generators.gesticulator_original.plugin:GesticulatorOriginal",
 }
 
 
