@@ -33,8 +33,11 @@ from evalsuite.generators.requests import requests_from_corpus
 from evalsuite.generators.runner import generate
 from evalsuite.generators.training import train
 
-SYSTEMS = {"gesticulator": {"words": "minilm"}, "aud2pose": {}, "aud2motion": {}, "aud2repr2pose": {},
-           "gesture2vec": {}, "ferstl-mogan": {}}
+# row label -> (generator, options); "gesticulator-audio" is the paper's audio-only ablation
+SYSTEMS: dict[str, tuple[str, dict]] = {
+    "gesticulator": ("gesticulator", {}), "gesticulator-audio": ("gesticulator", {"inputs": "audio"}),
+    "aud2pose": ("aud2pose", {}), "aud2motion": ("aud2motion", {}), "aud2repr2pose": ("aud2repr2pose", {}),
+    "gesture2vec": ("gesture2vec", {}), "ferstl-mogan": ("ferstl-mogan", {})}
 AUDIO_DRIVEN = {"gesticulator", "aud2pose", "aud2motion", "aud2repr2pose", "ferstl-mogan"}
 
 
@@ -69,10 +72,10 @@ def main(argv: list[str] | None = None) -> int:
     base = evaluate_condition(out / "mean_pose", corpus)
     natural = evaluate_condition(out / "natural", corpus)
     rows = []
-    for name, config in SYSTEMS.items():
-        if name not in BUILTIN or (args.only and name not in args.only):
+    for name, (generator, config) in SYSTEMS.items():
+        if generator not in BUILTIN or (args.only and name not in args.only):
             continue
-        entry = find_generator(name)
+        entry = find_generator(generator)
         t1 = time.perf_counter()
         result = train(entry, corpus, out / "models" / name, seed=args.seed, budget_minutes=args.budget,
                        config=config, progress=False)
@@ -87,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
                "lexical_vs_natural": own["lexical_mean"] / natural["lexical_mean"],
                "weights_sha256": json.loads((out / "models" / name / "model.json").read_text()).get("weights_sha256",
                                                                                                    "")[:12]}
-        if name in AUDIO_DRIVEN:
+        if generator in AUDIO_DRIVEN:
             generate(entry, swapped_audio(reqs), out / f"{name}_swapped", model_dir=out / "models" / name,
                      progress=False, check_determinism=False)
             row["swapped_audio_err_ratio"] = evaluate_condition(out / f"{name}_swapped", corpus)["pose_mse"] / own["pose_mse"]

@@ -70,9 +70,11 @@ def test_gesticulator_trains_and_generates_from_audio_and_text(corpus, test_requ
     assert all("val_loss" in r for r in history)
 
 
-def test_training_twice_with_one_seed_gives_the_same_weights(corpus, tmp_path_factory):
+@pytest.mark.parametrize("name, options", [("aud2repr2pose", {"epochs": 3, "dae_epochs": 2}),
+                                           ("gesticulator", {"epochs": 5, "words": "hash"})])
+def test_training_twice_with_one_seed_gives_the_same_weights(corpus, tmp_path_factory, name, options):
     hashes = []
     for _ in range(2):
-        model = _trained("aud2repr2pose", corpus, tmp_path_factory, None, epochs=3, dae_epochs=2)
+        model = _trained(name, corpus, tmp_path_factory, None, **options)
         hashes.append(json.loads((model / "model.json").read_text())["weights_sha256"])
     assert hashes[0] == hashes[1]

@@ -38,7 +38,7 @@ class MotionParams:
     retract_s: tuple[float, float] = (1.3, 1.5)
     rest_gap_s: float = 0.6                       # retract when the arm is free at least this long after retraction
     gesture_amplitude: tuple[float, float] = (0.75, 0.9)
-    hands_p: tuple[float, float, float] = (0.8, 0.1, 0.1)     # right, left, both (beats, raise, point, chest)
+    hands_p: tuple[float, float, float] = (0.9, 0.02, 0.08)     # right, left, both (beats, raise, point, chest)
     baton_deg: float = 14.0                       # elbow flick per syllable, x emphasis_gain when emphasised
     emphasis_gain: float = 1.8
     baton_lag_s: float = 0.04

@@ -102,18 +102,35 @@ class GesticulatorNet(nn.Module):
             mask[c.audio_dim:] = 0
         self.register_buffer("input_mask", mask)
 
-    def forward(self, speech: torch.Tensor, prev_poses: torch.Tensor | None = None) -> torch.Tensor:
+    def speech_codes(self, speech: torch.Tensor) -> torch.Tensor:
+        """Speech frames (B, L, A+X), L >= window -> speech codes (B, L - window + 1, hidden): code k is the
+        encoding of the window of frames k ... k + window - 1 (output frame k + past).
+
+        Each frame is encoded once and the windows are cut from the encodings, so a sequence costs one
+        frame encoding per frame instead of one per frame and window position (the same function)."""
         c = self.config
-        b = speech.shape[0]
-        x = self.frame_encoder(speech * self.input_mask).reshape(b, -1)
-        x = self.speech_layers(x)
+        b, length, _ = speech.shape
+        if length < c.window:
+            raise ValueError(f"{length} speech frames are fewer than the model's window of {c.window}")
+        frames = self.frame_encoder(speech * self.input_mask)                      # (B, L, frame_dim)
+        windows = frames.unfold(1, c.window, 1).transpose(2, 3)                     # (B, n, W, frame_dim)
+        return self.speech_layers(windows.reshape(b, length - c.window + 1, -1))
+
+    def decode(self, codes: torch.Tensor, prev_poses: torch.Tensor | None = None) -> torch.Tensor:
+        """Speech codes (B, hidden) and previous poses (B, P, D) -> pose (B, D)."""
+        c = self.config
+        x = codes
         if c.autoregressive:
             if prev_poses is None:
                 raise ValueError("an autoregressive Gesticulator needs the previous poses")
-            cond = self.pose_encoder(prev_poses.reshape(b, -1))
+            cond = self.pose_encoder(prev_poses.reshape(len(codes), -1))
             if c.film:
                 alpha, beta = cond.chunk(2, dim=-1)
                 x = x * alpha + beta
             else:
                 x = torch.cat([x, cond], dim=-1)
         return self.output(x)
+
+    def forward(self, speech: torch.Tensor, prev_poses: torch.Tensor | None = None) -> torch.Tensor:
+        """One window of speech frames (B, W, A+X) and the previous poses (B, P, D) -> pose (B, D)."""
+        return self.decode(self.speech_codes(speech)[:, 0], prev_poses)

@@ -106,24 +106,27 @@ def make_sequences(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], co
 
 def _rollout(net: GesticulatorNet, x: torch.Tensor, y: torch.Tensor, autoregressive: bool,
              period: int) -> torch.Tensor:
-    """Predict frames past .. len-future-1 of each sequence; returns (B, n_predicted, D)."""
+    """Predict frames past .. len-future-1 of each sequence; returns (B, n_predicted, D).
+
+    The speech codes of all predicted frames are computed at once (they do not depend on the poses); only
+    the pose conditioning runs frame by frame, and not at all without autoregression."""
     c = net.config
-    b, length, _ = x.shape
-    n_pred = length - c.past - c.future
+    codes = net.speech_codes(x)                                   # (B, n_pred, hidden)
+    b, n_pred, _ = codes.shape
     prev = y[:, c.past - c.n_prev_poses:c.past].clone()
-    if not autoregressive:
-        prev = torch.zeros_like(prev)
+    if not c.autoregressive:
+        return net.decode(codes.reshape(b * n_pred, -1)).reshape(b, n_pred, -1)
+    if not autoregressive:    # pretraining: the previous-pose input is zeroed, so every frame is independent
+        zeros = torch.zeros(b * n_pred, c.n_prev_poses, prev.shape[-1])
+        return net.decode(codes.reshape(b * n_pred, -1), zeros).reshape(b, n_pred, -1)
     outputs = []
     for k in range(n_pred):
         t = c.past + k
-        out = net(x[:, t - c.past:t + c.future + 1], prev if c.autoregressive else None)
+        out = net.decode(codes[:, k], prev)
         outputs.append(out)
-        if autoregressive:
-            # own prediction for two consecutive frames every `period` frames (period 1: always)
-            own = period == 1 or (k % period) < 2
-            nxt = out if own else y[:, t]
-        else:
-            nxt = torch.zeros_like(out)
+        # own prediction for two consecutive frames every `period` frames (period 1: always)
+        own = period == 1 or (k % period) < 2
+        nxt = out if own else y[:, t]
         prev = torch.cat([prev[:, 1:], nxt.unsqueeze(1)], dim=1)
     return torch.stack(outputs, dim=1)
 
@@ -138,7 +141,7 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
                        schedule: TrainSchedule = TrainSchedule(), *, seed: int = 0,
                        val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
                        budget_seconds: float | None = None, patience: int | None = None,
-                       on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
+                       weight_decay: float = 0.0, on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
     """Train on segments of (speech (T, A+X), poses (T, D)); deterministic for a seed on one machine.
 
     With ``budget_seconds`` the schedule is compressed so that its stages still run in order: training stops
@@ -156,7 +159,7 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
                                 config, schedule.sequence, schedule.sequence - config.past - config.future)
         val = torch.from_numpy(vx), torch.from_numpy(vy)
     net = GesticulatorNet(config)
-    opt = torch.optim.Adam(net.parameters(), lr=schedule.learning_rate)
+    opt = torch.optim.Adam(net.parameters(), lr=schedule.learning_rate, weight_decay=weight_decay)
     history: list[dict] = []
     best = BestWeights(net, patience)
     start = time.perf_counter()
@@ -213,11 +216,15 @@ def generate_poses(model: TrainedGesticulator, speech: Sequence[np.ndarray],
     x = torch.from_numpy(feats)
     start = np.zeros(c.pose_dim, np.float32) if initial_pose is None else model.pose_norm(initial_pose)
     prev = torch.from_numpy(np.tile(start, (len(speech), c.n_prev_poses, 1)).astype(np.float32))
-    out = torch.empty(len(speech), t_max, c.pose_dim)
-    for t in range(t_max):
-        pose = net(x[:, t:t + c.window], prev if c.autoregressive else None)
-        out[:, t] = pose
-        prev = torch.cat([prev[:, 1:], pose.unsqueeze(1)], dim=1)
+    codes = net.speech_codes(x)                                   # (B, t_max, hidden)
+    if not c.autoregressive:
+        out = net.decode(codes.reshape(-1, codes.shape[-1])).reshape(len(speech), t_max, -1)
+    else:
+        out = torch.empty(len(speech), t_max, c.pose_dim)
+        for t in range(t_max):
+            pose = net.decode(codes[:, t], prev)
+            out[:, t] = pose
+            prev = torch.cat([prev[:, 1:], pose.unsqueeze(1)], dim=1)
     return [model.pose_norm.inverse(out[i, :n].numpy()) for i, n in enumerate(lengths)]
 
 

@@ -1,0 +1,77 @@
+"""Issue 14's learning criteria for ``gesticulator``, on the corpus of ``benchmarks/bench_generators.py``.
+
+The corpus is the benchmark's: 30 minutes of the synthetic speaker, seed 0 (83 training, 10 validation and 10
+test segments; writing it takes about 10 s). A smaller corpus does not carry the criteria: on 15 minutes the
+same model's pose error is about 0.8 x mean pose, so this test trains on the full 30 minutes for the plug-in's
+default 40 epochs (about 4 minutes on one core, by epochs rather than a time budget so that a slower CI machine
+gets the same model), and the audio-only ablation for the same 40. That is what it costs to show the criteria
+in CI, about 9 minutes in all.
+
+Not asserted: the correlation of speech energy with wrist speed of at least 0.5. The model reaches about 0.2
+(natural motion: 0.6). The speaker's batons alternate direction on every syllable of a segment, so their
+direction depends on the count of syllables since the segment began; a model that sees 1.5 s of speech
+averages them out (docs/generators.md, "What is not met").
+"""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from evalsuite.corpus import load_corpus
+from evalsuite.corpus.synth.corpus import synthesize_corpus
+from evalsuite.generators import find_generator
+from evalsuite.generators.evaluation import evaluate_condition, swapped_audio
+from evalsuite.generators.requests import requests_from_corpus
+from evalsuite.generators.runner import generate
+from evalsuite.generators.training import train
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    root = tmp_path_factory.mktemp("speaker30")
+    synthesize_corpus(root / "corpus", 30.0, seed=0, progress=False)
+    corpus = load_corpus(root / "corpus")
+    reqs = requests_from_corpus(corpus, "test", 30.0)
+    gen = find_generator("gesticulator")
+    scores = {}
+
+    def condition(name, entry, **kwargs):
+        generate(entry, kwargs.pop("requests", reqs), root / name, progress=False, **kwargs)
+        scores[name] = evaluate_condition(root / name, corpus)
+
+    condition("mean_pose", find_generator("mean_pose"),
+              config={"from": str(root / "corpus" / "trn" / "main-agent" / "bvh")})
+    condition("oracle", find_generator("oracle"), config={"corpus": str(root / "corpus")})
+    for name, options in (("full", {}), ("audio_only", {"inputs": "audio"})):
+        train(gen, corpus, root / f"model_{name}", seed=0, config=options, progress=False)
+        condition(name, gen, model_dir=root / f"model_{name}", check_determinism=False)
+    condition("swapped", gen, requests=swapped_audio(reqs), model_dir=root / "model_full", check_determinism=False)
+    condition("text_only", gen, model_dir=root / "model_full", config={"zero_audio": True}, check_determinism=False)
+    print(json.dumps({k: {m: round(v, 3) for m, v in s.items() if m in ("pose_mse", "energy_speed_r", "lexical_mean")}
+                      for k, s in scores.items()}))
+    return scores
+
+
+def test_pose_error_is_at_most_six_tenths_of_the_mean_pose(run):
+    assert run["full"]["pose_mse"] <= 0.6 * run["mean_pose"]["pose_mse"]
+
+
+def test_another_segments_audio_raises_the_error_by_a_fifth(run):
+    assert run["swapped"]["pose_mse"] >= 1.2 * run["full"]["pose_mse"]
+
+
+def test_lexical_contrast_is_half_the_oracles_and_survives_silenced_audio(run):
+    oracle = run["oracle"]["lexical_mean"]
+    assert run["full"]["lexical_mean"] >= 0.5 * oracle
+    # the text path alone carries it: with the audio features at their training mean it is still there
+    assert run["text_only"]["lexical_mean"] >= 0.5 * oracle
+    # the paper's audio-only ablation shows less of it
+    assert run["audio_only"]["lexical_mean"] < 0.5 * run["full"]["lexical_mean"]
+
+
+def test_wrist_speed_follows_speech_energy_somewhat(run):
+    # the issue's 0.5 is not met (see the module doc); the coupling is there but weak
+    assert run["full"]["energy_speed_r"] > 0.1
