@@ -29,7 +29,8 @@ __all__ = ["SpeechNetConfig", "SpeechNet", "MotionDAE", "DEVIATIONS"]
 DEVIATIONS = (
     "Sizes are options; the CPU preset narrows the 256-unit layers.",
     "Optional sequence-level form of the speech network (one bidirectional GRU pass per chunk) instead of "
-    "one 61-frame window per output frame, for CPU training budgets; the windowed form is the default.",
+    "one 61-frame window per output frame, for CPU training budgets; the plug-ins default to it (form=windowed "
+    "gives the paper's).",
     "Motion is the corpus skeleton's joint rotations (exponential maps) or positions, not the paper's 64 "
     "Japanese-corpus joint positions + velocities (384-d).",
 )

@@ -77,6 +77,10 @@ class _Aud2(Generator):
             if value not in allowed:
                 raise GeneratorError(f"{name} must be one of {', '.join(allowed)}, got {value!r}", field=name)
         windowed = form == "windowed"
+        if windowed and self.system == "aud2motion":
+            raise GeneratorError("aud2motion is sequence-level by definition (a causal GRU returning one pose per "
+                                 "frame of a chunk); form=windowed would make it a centred-window model that sees "
+                                 "the future", field="form")
         return {"form": form, "representation": rep, "features": feats,
                 "width": int(self.option("width", 64)), "code_dim": int(self.option("code_dim", 40)),
                 "epochs": int(self.option("epochs", 300)), "dae_epochs": int(self.option("dae_epochs", 20)),

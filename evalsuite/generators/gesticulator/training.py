@@ -37,7 +37,7 @@ class TrainSchedule:
 
     pretrain_epochs: int = 7
     teacher_periods: tuple[int, ...] = (16, 8, 4)
-    free_epochs: int = 85        # autoregressive epochs without teacher forcing (100 epochs in all)
+    free_epochs: int = 85        # autoregressive epochs without teacher forcing (95 epochs in all with the defaults)
     batch_size: int = 64
     learning_rate: float = 1e-4
     sequence: int = 70           # frames per training sequence: past + predicted + future
