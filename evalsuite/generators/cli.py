@@ -82,15 +82,16 @@ def list_command(as_json: bool) -> None:
         click.echo(json.dumps([{"name": e.name, "origin": e.origin, "target": e.target, "distribution": e.distribution,
                                 "spec": e.spec.as_dict() if e.spec else None} for e in entries], indent=1))
         return
+    width = max([18] + [len(e.name) for e in entries])
     for e in entries:
         if e.spec is None:
-            click.echo(f"{e.name:18s} plug-in from {e.distribution or '?'} ({e.target}; not imported)")
+            click.echo(f"{e.name:{width}s} plug-in from {e.distribution or '?'} ({e.target}; not imported)")
             continue
         s = e.spec
         inputs = "+".join(n for n, v in (("audio", s.audio), ("text", s.transcript)) if v != "none") or "motion"
         flags = [f for f, on in (("trainable", s.trainable), ("stochastic", s.stochastic)) if on]
         fps = f"{s.native_fps:g} fps" if s.native_fps else "any fps"
-        click.echo(f"{e.name:18s} {s.kind:17s} {inputs:10s} {fps:8s} {s.output:9s} {' '.join(flags)}")
+        click.echo(f"{e.name:{width}s} {s.kind:17s} {inputs:10s} {fps:8s} {s.output:9s} {' '.join(flags)}")
 
 
 @generators.command("info")
