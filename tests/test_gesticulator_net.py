@@ -1,0 +1,58 @@
+"""The Gesticulator re-implementation's network and schedule, on random tensors (no corpus, no training)."""
+from __future__ import annotations
+
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet  # noqa: E402
+from evalsuite.generators.gesticulator.training import budgeted_schedule  # noqa: E402
+
+
+def _net(**changes):
+    torch.manual_seed(0)
+    config = GesticulatorConfig(audio_dim=6, text_dim=4, pose_dim=9, frame_dim=8, hidden=(16, 12), film_dim=24,
+                                **changes)
+    return GesticulatorNet(config).eval()
+
+
+@pytest.mark.parametrize("changes", [{}, {"film": False}, {"autoregressive": False}, {"past": 3, "future": 5}])
+def test_speech_codes_of_a_sequence_equal_one_window_at_a_time(changes):
+    net = _net(**changes)
+    c = net.config
+    speech = torch.randn(2, c.window + 7, 10)
+    prev = torch.randn(2, c.n_prev_poses, 9)
+    codes = net.speech_codes(speech)
+    assert codes.shape == (2, 8, 12)
+    with torch.no_grad():
+        for k in range(8):
+            one = net(speech[:, k:k + c.window], prev if c.autoregressive else None)
+            torch.testing.assert_close(net.decode(codes[:, k], prev if c.autoregressive else None), one)
+
+
+def test_too_short_a_sequence_and_a_missing_previous_pose_are_refused():
+    net = _net()
+    with pytest.raises(ValueError, match="fewer than the model's window"):
+        net.speech_codes(torch.zeros(1, net.config.window - 1, 10))
+    with pytest.raises(ValueError, match="needs the previous poses"):
+        net(torch.zeros(1, net.config.window, 10))
+
+
+def test_the_audio_only_ablation_ignores_the_text_features():
+    net = _net(use_text=False)
+    speech = torch.randn(1, net.config.window, 10)
+    other_text = speech.clone()
+    other_text[..., 6:] = torch.randn(1, net.config.window, 4)
+    prev = torch.zeros(1, 3, 9)
+    torch.testing.assert_close(net(speech, prev), net(other_text, prev))
+
+
+def test_the_compressed_schedule_keeps_the_papers_stage_order():
+    schedule = budgeted_schedule(40)
+    stages = [schedule.stage(e) for e in range(schedule.epochs)]
+    assert schedule.epochs == 40
+    assert stages[:3] == [(False, 0)] * 3                      # pretraining without autoregression
+    assert stages[3:6] == [(True, 16), (True, 8), (True, 4)]     # teacher forcing withdrawn
+    assert set(stages[6:]) == {(True, 1)}                         # then free
+    with pytest.raises(ValueError):
+        budgeted_schedule(4)
