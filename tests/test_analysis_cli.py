@@ -1,10 +1,10 @@
 """`evalsuite analyze` end to end: outputs, report with every figure, blinding, errors."""
 import base64
 import re
-import shutil
 
 import pandas as pd
 import pytest
+from browser_helpers import ARGS, chromium
 from click.testing import CliRunner
 
 from evalsuite.analysis.demo import run as demo_run
@@ -78,21 +78,13 @@ def test_html_embeds_every_figure_as_base64_png(analysed):
     assert "<script" not in html and "http" not in html.replace("http-equiv", "")  # self-contained
 
 
-def chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    raise AssertionError("the browser test needs Chromium (installed by .ci/run)")
-
-
 def test_report_renders_every_figure_in_a_browser(analysed, tmp_path):
     from playwright.sync_api import sync_playwright
 
     out, _ = analysed
     n_fig = len(list((out / "figures").glob("*.png")))
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=chromium(), args=["--no-sandbox", "--disable-gpu"])
+        browser = pw.chromium.launch(executable_path=chromium(), args=ARGS)
         try:
             page = browser.new_page(viewport={"width": 1200, "height": 3000})
             page.goto((out / "report.html").as_uri())

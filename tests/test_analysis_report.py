@@ -1,11 +1,11 @@
 """The report of a MUSHRA-only study: notes collapsed, only the settings that apply, the decisive
 columns on screen, a legend on the significance matrix."""
 import re
-import shutil
 
 import numpy as np
 import pandas as pd
 import pytest
+from browser_helpers import ARGS, chromium
 from click.testing import CliRunner
 
 from evalsuite.analysis.report import fig_significance
@@ -82,21 +82,13 @@ def test_decisive_columns_come_right_after_the_identifiers(report):
                                                      "p_holm", "pref_a", "ci_low", "ci_high"]
 
 
-def chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    raise AssertionError("the browser test needs Chromium (installed by .ci/run)")
-
-
 @pytest.mark.browser
 def test_decisive_columns_visible_at_1300_px(report):
     from playwright.sync_api import sync_playwright
 
     out, _, _ = report
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=chromium(), args=["--no-sandbox", "--disable-gpu"])
+        browser = pw.chromium.launch(executable_path=chromium(), args=ARGS)
         try:
             page = browser.new_page(viewport={"width": 1300, "height": 900})
             page.goto((out / "report.html").as_uri())

@@ -2,11 +2,10 @@
 from __future__ import annotations
 
 import pytest
+import torch
 
-torch = pytest.importorskip("torch")
-
-from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet  # noqa: E402
-from evalsuite.generators.gesticulator.training import budgeted_schedule  # noqa: E402
+from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
+from evalsuite.generators.gesticulator.training import budgeted_schedule
 
 
 def _net(**changes):

@@ -2,8 +2,6 @@
 synthetic-speaker corpus: the oracle against mean pose and mismatched natural motion, and time offsets."""
 from __future__ import annotations
 
-import shutil
-
 import numpy as np
 import pandas as pd
 import pytest
@@ -135,8 +133,6 @@ def test_the_family_needs_a_corpus():
 
 @pytest.fixture(scope="module")
 def scored(tmp_path_factory):
-    if shutil.which("espeak-ng") is None:
-        pytest.skip("espeak-ng is not installed (scripts/install-system-packages installs it)")
     from synth_helpers import build_conditions, build_corpus
 
     from evalsuite.cli import main

@@ -18,7 +18,6 @@ import json
 import os
 import pathlib
 import re
-import threading
 import urllib.parse
 import urllib.request
 import zlib
@@ -27,7 +26,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import study_helpers as h
-from werkzeug.serving import make_server
+from browser_helpers import ARGS as BASE_ARGS
+from browser_helpers import Server, chromium
 
 from study_app import create_app
 from study_app.context import store_of, study_of
@@ -35,38 +35,12 @@ from study_app.storage import ParticipantSession
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
+ARGS = [*BASE_ARGS, "--disable-background-networking",
         "--disable-component-update", "--no-first-run", "--disable-dev-shm-usage",
         "--autoplay-policy=no-user-gesture-required",
         # the MTurk test frames the loopback server in a (faked) public https page, which
         # Chromium's local-network-access checks would refuse; a real study server is public
         "--disable-features=LocalNetworkAccessChecks,BlockInsecurePrivateNetworkRequests"]
-
-
-class Server:
-    """The app on a real HTTP server thread on 127.0.0.1 (restartable on the same port)."""
-
-    def __init__(self, make_app, port=0):
-        self.make_app = make_app
-        self.app = make_app()
-        self.httpd = make_server("127.0.0.1", port, self.app, threaded=True)
-        self.port = self.httpd.server_port
-        self.thread = threading.Thread(target=self.httpd.serve_forever, daemon=True)
-        self.thread.start()
-
-    @property
-    def url(self):
-        return f"http://127.0.0.1:{self.port}"
-
-    def stop(self):
-        self.httpd.shutdown()
-        self.httpd.server_close()
-        self.thread.join(10)
-
-    def restart(self):
-        self.stop()
-        return Server(self.make_app, self.port)
 
 
 @pytest.fixture(scope="module")
@@ -84,7 +58,7 @@ def env(tmp_path_factory):
     server = Server(make_app)
     from playwright.sync_api import sync_playwright
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        browser = pw.chromium.launch(executable_path=chromium(), args=ARGS, headless=True)
         ns = SimpleNamespace(folder=folder, shots=shots, server=server, browser=browser)
         yield ns
         browser.close()

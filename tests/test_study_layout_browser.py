@@ -12,14 +12,14 @@ from __future__ import annotations
 import json
 import os
 import pathlib
-import threading
 import urllib.request
 from types import SimpleNamespace
 
 import pytest
 import study_helpers as h
+from browser_helpers import ARGS as BASE_ARGS
+from browser_helpers import Server, chromium
 from layout_helpers import make_layout_study, make_more_study
-from werkzeug.serving import make_server
 
 from study_app import create_app
 from study_app.context import store_of
@@ -27,30 +27,11 @@ from study_app.storage import Event
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
+ARGS = [*BASE_ARGS, "--disable-background-networking",
         "--disable-component-update", "--no-first-run", "--disable-dev-shm-usage",
         "--autoplay-policy=no-user-gesture-required"]
 LAPTOP = {"width": 1366, "height": 768}
 PHONE = {"width": 390, "height": 844}
-
-
-class Server:
-    def __init__(self, app):
-        self.app = app
-        self.httpd = make_server("127.0.0.1", 0, app, threaded=True)
-        self.port = self.httpd.server_port
-        self.thread = threading.Thread(target=self.httpd.serve_forever, daemon=True)
-        self.thread.start()
-
-    @property
-    def url(self):
-        return f"http://127.0.0.1:{self.port}"
-
-    def stop(self):
-        self.httpd.shutdown()
-        self.httpd.server_close()
-        self.thread.join(10)
 
 
 @pytest.fixture(scope="module")
@@ -62,10 +43,10 @@ def env(tmp_path_factory):
     app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{folder / 'layout.db'}",
                       "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
                       "INSTANCE_PATH": str(folder / "inst"), "ADMIN_REFRESH_SECONDS": 1})
-    server = Server(app)
+    server = Server(lambda: app)
     from playwright.sync_api import sync_playwright
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        browser = pw.chromium.launch(executable_path=chromium(), args=ARGS, headless=True)
         yield SimpleNamespace(folder=folder, shots=shots, server=server, browser=browser, app=app)
         browser.close()
     server.stop()
@@ -439,7 +420,7 @@ def more(env):
     app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{folder / 'more.db'}",
                       "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
                       "INSTANCE_PATH": str(folder / "inst")})
-    server = Server(app)
+    server = Server(lambda: app)
     ns = SimpleNamespace(folder=folder, shots=env.shots, server=server, browser=env.browser, app=app)
     j = Journey(ns, "8c6d4e2f1a0b9c8d7e6f5a4b", study_id="layout-more")
     yield j
@@ -489,7 +470,7 @@ def test_pages_without_ratings_fit_a_small_phone(env):
     app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{folder / 'phone.db'}",
                       "SECRET_KEY": h.SECRET, "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
                       "INSTANCE_PATH": str(folder / "inst")})
-    server = Server(app)
+    server = Server(lambda: app)
     small = {"width": 360, "height": 740}
     try:
         ns = SimpleNamespace(folder=folder, shots=env.shots, server=server, browser=env.browser, app=app)

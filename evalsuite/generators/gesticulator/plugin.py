@@ -110,7 +110,7 @@ class Gesticulator(Generator):
         st = self._settings()
         torch = torch_setup(seed, st["threads"])  # first: a clear message when torch is missing
         from evalsuite.generators.gesticulator.net import GesticulatorConfig
-        from evalsuite.generators.gesticulator.training import budgeted_schedule, train_gesticulator
+        from evalsuite.generators.gesticulator.training import PREDICTED_FRAMES, budgeted_schedule, train_gesticulator
 
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), "expmap")
@@ -123,7 +123,7 @@ class Gesticulator(Generator):
                                     future=st["future"], dropout=st["dropout"],
                                     prev_pose_dropout=st["prev_pose_dropout"], **SIZES[st["size"]])
         schedule = replace(budgeted_schedule(st["epochs"]), batch_size=st["batch_size"],
-                           learning_rate=st["learning_rate"], sequence=st["past"] + 40 + st["future"])
+                           learning_rate=st["learning_rate"], sequence=st["past"] + PREDICTED_FRAMES + st["future"])
         model = train_gesticulator([a.speech for a in tr], [a.poses for a in tr], config, schedule,
                                    seed=seed, val_speech=[a.speech for a in va],
                                    val_poses=[a.poses for a in va], budget_seconds=budget_seconds(budget_minutes),

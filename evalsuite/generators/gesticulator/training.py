@@ -25,9 +25,10 @@ from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
 
 __all__ = ["TrainSchedule", "Normaliser", "TrainedGesticulator", "train_gesticulator", "generate_poses",
-           "make_sequences", "velocity_weight"]
+           "make_sequences", "velocity_weight", "PREDICTED_FRAMES"]
 
 velocity_weight = 0.6  # alpha of the paper's loss (2)
+PREDICTED_FRAMES = 40  # frames predicted per training sequence, between its past and future context
 
 
 @dataclass(frozen=True)
@@ -40,7 +41,7 @@ class TrainSchedule:
     free_epochs: int = 85        # autoregressive epochs without teacher forcing (95 epochs in all with the defaults)
     batch_size: int = 64
     learning_rate: float = 1e-4
-    sequence: int = 70           # frames per training sequence: past + predicted + future
+    sequence: int = 10 + PREDICTED_FRAMES + 20   # frames per training sequence: past + predicted + future
     stride: int = 10             # between training sequences (4x overlap of the predicted frames)
 
     @property
