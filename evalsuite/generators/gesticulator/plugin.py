@@ -61,10 +61,12 @@ class Gesticulator(Generator):
                 "autoregressive": "true (default); false: the paper's 'no autoregression' ablation",
                 "film": "true (default); false: concatenation instead of FiLM (ablation)",
                 "size": "cpu (default) or paper (124 / 612, 256 / 512 units)",
-                "epochs": "epochs of the compressed schedule (default 40)", "threads": "torch threads (default 1)",
+                "epochs": "epochs of the compressed schedule (default 60)", "threads": "torch threads (default 1)",
                 "patience": "stop after this many epochs without a better validation loss (default none); the "
                             "best validation epoch's weights are kept",
                 "batch_size": "sequences per batch (default 64)", "learning_rate": "Adam (default 1e-3; paper 1e-4)",
+                "lr_schedule": "cosine (default: decays to 1 % of learning_rate by the last epoch) or constant "
+                               "(the paper's)",
                 "past": "speech frames before the current one (default 10 = 0.5 s, the paper's)",
                 "future": "speech frames after the current one (default 20 = 1 s, the paper's)",
                 "dropout": "dropout of the speech layers (default 0.5; the paper's 0.2)",
@@ -81,7 +83,9 @@ class Gesticulator(Generator):
             "with the paper's values the validation loss rises after about 10 epochs on 30 minutes of speech.",
             "Sizes: the CPU preset has 32-unit frame encodings and 256/128 hidden units (paper: 124, 612/256).",
             "Schedule: the paper's stages (pretraining without autoregression, teacher forcing every 16/8/4 "
-            "frames, then free) compressed into the given epochs; Adam 1e-3 instead of 1e-4 for short budgets.",
+            "frames, then free) compressed into the given epochs (60 by default); Adam 1e-3 instead of 1e-4 for short "
+            "budgets, decayed to 1e-5 by a cosine over the epochs (the paper: constant); with a constant rate, "
+            "trainings of equal validation loss scattered from 0.55 to 0.71 x mean pose's held-out error.",
             "No mirroring augmentation; motion hip-centric with the non-modelled joints held at the first "
             "training frame (as the original's PyMO pipeline)."))
 
@@ -93,12 +97,16 @@ class Gesticulator(Generator):
         size = str(self.option("size", "cpu"))
         if size not in SIZES:
             raise GeneratorError(f"size must be one of {', '.join(SIZES)}, got {size!r}", field="size")
+        lr_schedule = str(self.option("lr_schedule", "cosine"))
+        if lr_schedule not in ("cosine", "constant"):
+            raise GeneratorError(f"lr_schedule must be cosine or constant, got {lr_schedule!r}", field="lr_schedule")
         return {"inputs": inputs, "size": size, "words": str(self.option("words", "minilm-static")),
                 "autoregressive": bool(self.option("autoregressive", True)), "film": bool(self.option("film", True)),
-                "epochs": int(self.option("epochs", 40)), "threads": int(self.option("threads", 1)),
+                "epochs": int(self.option("epochs", 60)), "threads": int(self.option("threads", 1)),
                 "patience": self.option("patience"),
                 "batch_size": int(self.option("batch_size", 64)),
                 "learning_rate": float(self.option("learning_rate", 1e-3)),
+                "lr_schedule": str(self.option("lr_schedule", "cosine")),
                 "past": int(self.option("past", 10)), "future": int(self.option("future", 20)),
                 "dropout": float(self.option("dropout", 0.5)), "weight_decay": float(self.option("weight_decay", 1e-3)),
                 "prev_pose_dropout": float(self.option("prev_pose_dropout", 0.8))}
@@ -123,7 +131,8 @@ class Gesticulator(Generator):
                                     future=st["future"], dropout=st["dropout"],
                                     prev_pose_dropout=st["prev_pose_dropout"], **SIZES[st["size"]])
         schedule = replace(budgeted_schedule(st["epochs"]), batch_size=st["batch_size"],
-                           learning_rate=st["learning_rate"], sequence=st["past"] + PREDICTED_FRAMES + st["future"])
+                           learning_rate=st["learning_rate"], lr_schedule=st["lr_schedule"],
+                           sequence=st["past"] + PREDICTED_FRAMES + st["future"])
         model = train_gesticulator([a.speech for a in tr], [a.poses for a in tr], config, schedule,
                                    seed=seed, val_speech=[a.speech for a in va],
                                    val_poses=[a.poses for a in va], budget_seconds=budget_seconds(budget_minutes),

@@ -43,6 +43,16 @@ class TrainSchedule:
     learning_rate: float = 1e-4
     sequence: int = 10 + PREDICTED_FRAMES + 20   # frames per training sequence: past + predicted + future
     stride: int = 10             # between training sequences (4x overlap of the predicted frames)
+    lr_schedule: str = "constant"  # or "cosine": decays to 1 % of learning_rate over the epochs (a deviation)
+
+    def learning_rate_at(self, epoch: int) -> float:
+        """Learning rate of a zero-based epoch: constant (the paper's) or a cosine decay to 1 % by the last epoch."""
+        if self.lr_schedule == "constant" or self.epochs <= 1:
+            return self.learning_rate
+        if self.lr_schedule != "cosine":
+            raise ValueError(f"lr_schedule must be 'constant' or 'cosine', got {self.lr_schedule!r}")
+        floor = 0.01
+        return self.learning_rate * (floor + (1 - floor) * 0.5 * (1 + math.cos(math.pi * epoch / (self.epochs - 1))))
 
     @property
     def epochs(self) -> int:
@@ -166,6 +176,8 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
     start = time.perf_counter()
     for epoch in range(schedule.epochs):
         autoregressive, period = schedule.stage(epoch)
+        for group in opt.param_groups:
+            group["lr"] = schedule.learning_rate_at(epoch)
         net.train()
         order = rng.permutation(len(xt))
         total, n = 0.0, 0
