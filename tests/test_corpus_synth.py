@@ -226,3 +226,35 @@ def test_ten_minutes_in_under_a_minute(tmp_path):
     elapsed = time.perf_counter() - t0
     assert elapsed < 60.0
     assert sum(s["duration"] for s in meta["segments"].values()) >= 9.5 * 60
+
+
+
+
+def test_rebound_batons_go_out_and_back_within_each_syllable_and_old_corpora_keep_alternate():
+    from evalsuite.corpus.synth.body import channel_index
+    from evalsuite.corpus.synth.model import oracle_motion
+    from evalsuite.corpus.types import Transcript, Word
+
+    # one word of two syllables, cut at 0.25 s: no gesture unit (not emphasised, not a keyword)
+    transcript = Transcript([Word("garden", 0.5, 1.0)])
+    params = MotionParams(fps=100.0, sway_deg=0.0, breath_deg=0.0)
+    onsets = [[0.0, 0.25]]
+    m, _ = oracle_motion(transcript, 2.0, seed=1, params=params, onsets=onsets)
+    alt, _ = oracle_motion(transcript, 2.0, seed=1, params=params.replace(baton="alternate"), onsets=onsets)
+    col = channel_index(m.skeleton, "RightForeArm", "Yrotation")
+    start = 0.5 + params.baton_lag_s
+    at = {t: int(round(t * 100)) for t in (start, start + 0.125, start + 0.25, start + 0.375, start + 0.5)}
+    rebound = m.values[:, col] - m.values[at[start], col]     # from the resting angle
+    # out at the middle of each syllable, back to the starting angle at its end: the direction of every
+    # flick is the same, whatever came before
+    assert rebound[at[start + 0.125]] > 3.0 and rebound[at[start + 0.375]] > 3.0
+    assert abs(rebound[at[start + 0.25]]) < 1e-6 and abs(rebound[at[start + 0.5]]) < 1e-6
+    # the earlier form: up on the first syllable, down on the second
+    a = alt.values[:, col] - alt.values[at[start], col]
+    assert a[at[start + 0.25]] > 3.0 and a[at[start + 0.5]] < -3.0
+    # a corpus.json written before the field existed is read as the alternate form
+    old = {k: v for k, v in MotionParams().to_dict().items() if k not in ("baton", "baton_apex")}
+    assert MotionParams.from_dict(old).baton == "alternate"
+    assert MotionParams.from_dict(MotionParams().to_dict()).baton == "rebound"
+    with pytest.raises(ValueError, match="baton must be"):
+        MotionParams(baton="circle")

@@ -13,9 +13,11 @@ Given words with times and emphasis flags, a seed and :class:`MotionParams`, :fu
    the previous unit's hold ends is dropped (a beat gives way to a semantic gesture). Negation is a head
    shake: it uses no arm and never conflicts.
 2. **renders** the units as keyframe tracks of arm poses (body.POSES) with minimum-jerk transitions, adds
-   *batons* (on each syllable the forearms flick up or down, alternately, to ``+-baton_deg/2`` x gain x
-   min(1.5, syllable duration / 0.2 s), with a minimum-jerk profile, lagged ``baton_lag_s``: wrist speed
-   follows speech and stops at syllable onsets), nods on emphasised words, head shakes, breathing and sway,
+   *batons* (on each syllable the forearms flick out to ``baton_deg/2`` x gain x min(1.5, syllable
+   duration / 0.2 s) at ``baton_apex`` of the syllable and back by its end (``baton="rebound"``, the two
+   movement phases of a beat); ``baton="alternate"``, the model before 0.2, flicks up on one syllable and
+   down on the next; minimum-jerk profiles, lagged ``baton_lag_s``: wrist speed follows speech and stops
+   at syllable onsets), nods on emphasised words, head shakes, breathing and sway,
    and labels each frame with the phase, gesture kind and keyword of the unit it belongs to.
 
 Every random number is drawn in a fixed order whatever the switches, so the switches change only what
@@ -220,8 +222,8 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
         vals = tr.sample(t)
         for c, (joint, ch) in enumerate(ARM_CHANNELS):
             values[:, channel_index(sk, side + joint, ch)] = vals[:, c]
-    # batons: on every syllable the forearms flick (elbow flexion, minimum-jerk, alternately up by
-    # baton_deg x gain and back), so wrist speed follows the speech and stops at syllable onsets;
+    # batons: on every syllable the forearms flick (elbow flexion, minimum-jerk, out and back, or
+    # alternately up and down), so wrist speed follows the speech and stops at syllable onsets;
     # nods on emphasised words
     baton = Track(np.zeros(1))
     nod = np.zeros(n)
@@ -234,9 +236,13 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
             cuts.append(w.duration)
             baton.hold(start)
             for a, b in zip(cuts[:-1], cuts[1:]):
-                up = not up
                 size = p.baton_deg * gain * min(1.5, (b - a) / 0.2)   # about the same speed on every syllable
-                baton.key(start + b, np.array([size / 2 if up else -size / 2]))
+                if p.baton == "rebound":    # out to size/2 and back within the syllable
+                    baton.key(start + a + p.baton_apex * (b - a), np.array([size / 2]))
+                    baton.key(start + b, np.array([0.0]))
+                else:                       # "alternate": up on one syllable, down on the next
+                    up = not up
+                    baton.key(start + b, np.array([size / 2 if up else -size / 2]))
             if emph:
                 nod += p.nod_deg * _bump(t, start, 0.35)
     flick = baton.sample(t)[:, 0] * p.amplitude

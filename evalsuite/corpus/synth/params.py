@@ -42,6 +42,11 @@ class MotionParams:
     baton_deg: float = 14.0                       # elbow flick per syllable, x emphasis_gain when emphasised
     emphasis_gain: float = 1.8
     baton_lag_s: float = 0.04
+    # "rebound": out and back within each syllable (a beat's two movement phases, McNeill 1992), so the
+    # flick's direction is known from the syllable alone; "alternate" (corpora before 0.2.0): up on one
+    # syllable, down on the next, a direction set by the count of syllables since the segment began
+    baton: str = "rebound"
+    baton_apex: float = 0.5                       # the flick's turning point, as a fraction of the syllable
     min_syllable_s: float = 0.08                  # onsets closer than this to a word's edges do not cut it
     nod_deg: float = 5.0
     shake_deg: float = 14.0
@@ -66,4 +71,11 @@ class MotionParams:
     def from_dict(cls, data: dict[str, Any]) -> MotionParams:
         names = {f.name for f in dataclasses.fields(cls)}
         values: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items() if k in names}
+        values.setdefault("baton", "alternate")   # corpora written before the field existed
         return cls(**values)
+
+    def __post_init__(self) -> None:
+        if self.baton not in ("rebound", "alternate"):
+            raise ValueError(f"baton must be 'rebound' or 'alternate', got {self.baton!r}")
+        if not 0.0 < self.baton_apex < 1.0:
+            raise ValueError(f"baton_apex must be between 0 and 1, got {self.baton_apex}")
