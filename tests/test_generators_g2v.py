@@ -18,7 +18,7 @@ from g2v_mogan_helpers import synth_corpus
 from evalsuite.cli import main
 from evalsuite.generators import GeneratorError, find_generator
 
-CONFIG = {"codebook": 48, "dae_epochs": 10, "vq_epochs": 12, "vq_decoder_epochs": 6, "translation_epochs": 40}
+CONFIG = {"codebook": 48, "dae_epochs": 10, "vq_epochs": 12, "vq_decoder_epochs": 6, "translation_epochs": 60}
 
 
 def test_spec_is_text_only_and_info_lists_citation_licence_deviations():

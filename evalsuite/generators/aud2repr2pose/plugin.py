@@ -35,6 +35,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
 
 __all__ = ["Aud2Pose", "Aud2Motion", "Aud2Repr2Pose"]
 
@@ -50,10 +51,13 @@ OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-fra
            "width": "units of the dense and GRU layers (default 64; paper 256)",
            "code_dim": "aud2repr2pose: size of the motion representation (default 40, as GENEA 2020 BA)",
            "epochs": "most epochs of the speech network (default 300)", "dae_epochs": "autoencoder epochs (default 20)",
+           "lr_schedule": "constant (default, the paper's) or cosine (Adam's rate decays to 1 % by epoch 'epochs')",
            "patience": "stop after this many epochs without a better validation loss (default 25); the best "
                        "validation epoch's weights are kept",
            "batch_size": "windows or chunks per batch (default 16 chunks / 2056 windows)",
-           "learning_rate": "Adam (default 1e-3, the paper's)", "threads": "torch threads (default 1)"}
+           "learning_rate": "Adam (default 1e-3, the paper's)",
+           "scale_floor": FLOOR_OPTION,
+           "threads": "torch threads (default 1)"}
 DEVIATIONS = ("The speech network runs in the sequence-level form by default (one bidirectional GRU pass per "
               "100-frame chunk instead of one 61-frame window per output frame: ~60x less computation on a CPU); "
               "form=windowed is the paper's.",
@@ -61,7 +65,7 @@ DEVIATIONS = ("The speech network runs in the sequence-level form by default (on
               "(early stopping), where the paper trained a fixed number of epochs.",
               "Motion: joint rotations (exponential maps) of the GENEA 2020 upper body of the corpus's skeleton by "
               "default, or hip-centred joint positions; the paper used 64 joint positions + velocities of a "
-              "Japanese corpus.")
+              "Japanese corpus.", FLOOR_DEVIATION)
 
 
 class _Aud2(Generator):
@@ -71,9 +75,11 @@ class _Aud2(Generator):
         form = str(self.option("form", "sequence"))
         rep = str(self.option("representation", "expmap"))
         feats = str(self.option("features", "mfcc"))
+        schedule = str(self.option("lr_schedule", "constant"))
         for name, value, allowed in (("form", form, ("sequence", "windowed")),
                                      ("representation", rep, ("expmap", "positions")),
-                                     ("features", feats, ("mfcc", "mfcc+prosody"))):
+                                     ("features", feats, ("mfcc", "mfcc+prosody")),
+                                     ("lr_schedule", schedule, ("constant", "cosine"))):
             if value not in allowed:
                 raise GeneratorError(f"{name} must be one of {', '.join(allowed)}, got {value!r}", field=name)
         windowed = form == "windowed"
@@ -86,7 +92,9 @@ class _Aud2(Generator):
                 "epochs": int(self.option("epochs", 300)), "dae_epochs": int(self.option("dae_epochs", 20)),
                 "patience": int(self.option("patience", 25)),
                 "batch_size": int(self.option("batch_size", 2056 if windowed else 16)),
-                "learning_rate": float(self.option("learning_rate", 1e-3)), "threads": int(self.option("threads", 1))}
+                "learning_rate": float(self.option("learning_rate", 1e-3)), "threads": int(self.option("threads", 1)),
+                "scale_floor": float(self.option("scale_floor", DEFAULT_FLOOR)),
+                "lr_schedule": schedule}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -109,7 +117,7 @@ class _Aud2(Generator):
                              batch_size=st["batch_size"], learning_rate=st["learning_rate"], seed=seed,
                              val_speech=vspeech, val_poses=[a.poses for a in va],
                              budget_seconds=budget_seconds(budget_minutes), patience=st["patience"],
-                             on_epoch=progress)
+                             scale_floor=st["scale_floor"], lr_schedule=st["lr_schedule"], on_epoch=progress)
         rep.save(out_dir)
         sha = save_state(out_dir, "speech_net.pt", model.speech_net)
         if model.dae is not None:

@@ -16,6 +16,8 @@ from torch import nn
 
 from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
 from evalsuite.generators.early_stopping import BestWeights
+from evalsuite.generators.scaling import floored_spread
+from evalsuite.generators.schedules import SCHEDULES, learning_rate_at
 
 __all__ = ["MaxAbsScaler", "Standardiser", "TrainedSystem", "train_dae", "train_system", "generate",
            "SYSTEMS"]
@@ -36,10 +38,12 @@ class MaxAbsScaler:
     scale: np.ndarray
 
     @classmethod
-    def fit(cls, arrays: Sequence[np.ndarray]) -> MaxAbsScaler:
+    def fit(cls, arrays: Sequence[np.ndarray], floor: float = 0.0) -> MaxAbsScaler:
+        """``floor``: a dimension's range is at least this fraction of the widest one's
+        (:func:`~evalsuite.generators.scaling.floored_spread`; 0: the paper's scaling)."""
         x = np.concatenate(arrays)
         mean = x.mean(0)
-        return cls(mean, np.maximum(np.abs(x - mean).max(0), 1e-6))
+        return cls(mean, floored_spread(np.abs(x - mean).max(0), floor))
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         return ((x - self.mean) / self.scale).astype(np.float32)
@@ -119,16 +123,19 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
                  config: dict | None = None, code_dim: int = 40, dae_epochs: int = 20, epochs: int = 120,
                  batch_size: int = 2056, learning_rate: float = 1e-3, chunk: int = 100, seed: int = 0,
                  val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
-                 budget_seconds: float | None = None, patience: int | None = None,
+                 budget_seconds: float | None = None, patience: int | None = None, scale_floor: float = 0.0,
+                 lr_schedule: str = "constant",
                  on_epoch: Callable[[dict], None] | None = None) -> TrainedSystem:
     """Train one of ``SYSTEMS`` on segments; deterministic for a seed on one machine. With validation data the
     weights of the best validation epoch are kept (:class:`~evalsuite.generators.early_stopping.BestWeights`;
     ``patience``: stop after that many epochs without improvement)."""
     if system not in SYSTEMS:
         raise ValueError(f"unknown system {system!r}; expected one of {', '.join(SYSTEMS)}")
+    if lr_schedule not in SCHEDULES:
+        raise ValueError(f"lr_schedule must be one of {', '.join(SCHEDULES)}, got {lr_schedule!r}")
     uses_repr, overrides = SYSTEMS[system]
     start = time.perf_counter()
-    speech_norm, pose_norm = Standardiser.fit(speech), MaxAbsScaler.fit(poses)
+    speech_norm, pose_norm = Standardiser.fit(speech), MaxAbsScaler.fit(poses, scale_floor)
     xs = [speech_norm(s) for s in speech]
     ys = [pose_norm(p) for p in poses]
     dae = None
@@ -168,6 +175,8 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
     history: list[dict] = []
     best = BestWeights(net, patience)
     for epoch in range(epochs):
+        for group in opt.param_groups:
+            group["lr"] = learning_rate_at(lr_schedule, learning_rate, epoch, epochs)
         net.train()
         total = 0.0
         for idx in _epochs(len(xt), batch_size, rng):

@@ -38,6 +38,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
 
 __all__ = ["FerstlMogan", "ABLATIONS"]
 
@@ -91,8 +92,9 @@ class FerstlMogan(Generator):
                 "batch_size": "sequences of 100 frames per batch (default 16)",
                 "learning_rate": "Adam, classifier and pre-training (default 1e-3)",
                 "adversarial_learning_rate": "RMSprop (default 5e-4)",
-                "threads": "torch threads (default 1)"},
-        deviations=CORE_DEVIATIONS + MY_DEVIATIONS)
+                "threads": "torch threads (default 1)",
+                "scale_floor": FLOOR_OPTION},
+        deviations=CORE_DEVIATIONS + MY_DEVIATIONS + (FLOOR_DEVIATION,))
 
     def _settings(self) -> dict[str, Any]:
         ablation = str(self.option("ablation", "none"))
@@ -112,7 +114,8 @@ class FerstlMogan(Generator):
                 "batch_size": int(self.option("batch_size", 16)),
                 "learning_rate": float(self.option("learning_rate", 1e-3)),
                 "adversarial_learning_rate": float(self.option("adversarial_learning_rate", 5e-4)),
-                "threads": int(self.option("threads", 1))}
+                "threads": int(self.option("threads", 1)),
+                "scale_floor": float(self.option("scale_floor", DEFAULT_FLOOR))}
 
     # -- training ------------------------------------------------------------------------------------------
     def _arrays(self, segs: Sequence[Segment], rep: PoseRepresentation, use_corpus_labels: bool):
@@ -160,7 +163,7 @@ class FerstlMogan(Generator):
                              phase_pretrain_tries=st["phase_pretrain_tries"],
                              learning_rate=st["learning_rate"],
                              adversarial_learning_rate=st["adversarial_learning_rate"],
-                             discriminators=ABLATIONS[st["ablation"]])
+                             discriminators=ABLATIONS[st["ablation"]], scale_floor=st["scale_floor"])
         model = train_mogan(speech, poses, phases, arm, config, stages, seed=seed, val=(vspeech, vposes, vphases),
                             budget_seconds=budget_seconds(budget_minutes), on_step=progress)
         rep.save(out_dir)

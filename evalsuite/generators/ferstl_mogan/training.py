@@ -36,6 +36,7 @@ from evalsuite.generators.ferstl_mogan.net import (
     PhaseClassifier,
     SequenceDiscriminator,
 )
+from evalsuite.generators.scaling import floored_spread
 
 __all__ = ["MoganStages", "TrainedMogan", "train_mogan", "generate_mogan", "weighted_f1", "WEIGHTS"]
 
@@ -54,6 +55,7 @@ class MoganStages:
     learning_rate: float = 1e-3
     adversarial_learning_rate: float = 1e-4
     discontinuity_weight: float = 1.0
+    scale_floor: float = 0.0           # a position's std is at least this fraction of the widest one's
     discriminators: tuple[str, ...] = ("phase", "realism", "minibatch", "displacement")  # ablations drop some
     budget_shares: tuple[float, ...] = (0.15, 0.45, 0.55, 1.0)   # cumulative deadlines of the stages
 
@@ -131,7 +133,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
 
     allx, ally = np.concatenate(speech), np.concatenate(positions)
     smean, sstd = allx.mean(0), np.maximum(allx.std(0), 1e-6)
-    pmean, pstd = ally.mean(0), np.maximum(ally.std(0), 1e-6)
+    pmean, pstd = ally.mean(0), floored_spread(ally.std(0), stages.scale_floor)
     xs, fol = _sequences([((s - smean) / sstd).astype(np.float32) for s in speech], config.sequence)
     ys, _ = _sequences([((p - pmean) / pstd).astype(np.float32) for p in positions], config.sequence)
     ls, _ = _sequences([np.asarray(p, np.int64) for p in phases], config.sequence)

@@ -23,6 +23,8 @@ from torch import nn
 
 from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
+from evalsuite.generators.scaling import floored_spread
+from evalsuite.generators.schedules import learning_rate_at
 
 __all__ = ["TrainSchedule", "Normaliser", "TrainedGesticulator", "train_gesticulator", "generate_poses",
            "make_sequences", "velocity_weight", "PREDICTED_FRAMES"]
@@ -47,12 +49,7 @@ class TrainSchedule:
 
     def learning_rate_at(self, epoch: int) -> float:
         """Learning rate of a zero-based epoch: constant (the paper's) or a cosine decay to 1 % by the last epoch."""
-        if self.lr_schedule == "constant" or self.epochs <= 1:
-            return self.learning_rate
-        if self.lr_schedule != "cosine":
-            raise ValueError(f"lr_schedule must be 'constant' or 'cosine', got {self.lr_schedule!r}")
-        floor = 0.01
-        return self.learning_rate * (floor + (1 - floor) * 0.5 * (1 + math.cos(math.pi * epoch / (self.epochs - 1))))
+        return learning_rate_at(self.lr_schedule, self.learning_rate, epoch, self.epochs)
 
     @property
     def epochs(self) -> int:
@@ -76,9 +73,11 @@ class Normaliser:
     std: np.ndarray
 
     @classmethod
-    def fit(cls, arrays: Sequence[np.ndarray]) -> Normaliser:
+    def fit(cls, arrays: Sequence[np.ndarray], floor: float = 0.0) -> Normaliser:
+        """``floor``: a dimension's standard deviation is taken as at least this fraction of the widest one's
+        (:func:`~evalsuite.generators.scaling.floored_spread`; 0: unit variance for every dimension)."""
         x = np.concatenate(arrays, axis=0)
-        return cls(x.mean(axis=0), np.maximum(x.std(axis=0), 1e-6))
+        return cls(x.mean(axis=0), floored_spread(x.std(axis=0), floor))
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         return ((x - self.mean) / self.std).astype(np.float32)
@@ -152,7 +151,8 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
                        schedule: TrainSchedule = TrainSchedule(), *, seed: int = 0,
                        val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
                        budget_seconds: float | None = None, patience: int | None = None,
-                       weight_decay: float = 0.0, on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
+                       weight_decay: float = 0.0, scale_floor: float = 0.0,
+                       on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
     """Train on segments of (speech (T, A+X), poses (T, D)); deterministic for a seed on one machine.
 
     With ``budget_seconds`` the schedule is compressed so that its stages still run in order: training stops
@@ -160,7 +160,7 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
     epoch are kept (``patience``: stop after that many epochs without improvement)."""
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
-    speech_norm, pose_norm = Normaliser.fit(speech), Normaliser.fit(poses)
+    speech_norm, pose_norm = Normaliser.fit(speech), Normaliser.fit(poses, scale_floor)
     x, y = make_sequences([speech_norm(s) for s in speech], [pose_norm(p) for p in poses], config,
                           schedule.sequence, schedule.stride)
     xt, yt = torch.from_numpy(x), torch.from_numpy(y)

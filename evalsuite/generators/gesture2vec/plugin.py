@@ -41,6 +41,7 @@ from evalsuite.generators.reimpl import (
     weights_sha256,
     write_json,
 )
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
 
 __all__ = ["Gesture2Vec", "code_usage", "SIZES"]
 
@@ -103,8 +104,9 @@ class Gesture2Vec(Generator):
                 "reset_dead_codes": "true (default) or false: restart unused codes in VQ-DVAE training",
                 "aligned": "true (default): the translation decoder also reads the words of its chunk and the one "
                            "before; false: attention alone (the paper's)",
-                "threads": "torch threads (default 1)"},
-        deviations=CORE_DEVIATIONS + MY_DEVIATIONS)
+                "threads": "torch threads (default 1)",
+                "scale_floor": FLOOR_OPTION},
+        deviations=CORE_DEVIATIONS + MY_DEVIATIONS + (FLOOR_DEVIATION,))
 
     # -- options -------------------------------------------------------------------------------------------
     def _settings(self) -> dict[str, Any]:
@@ -124,7 +126,8 @@ class Gesture2Vec(Generator):
               "learning_rate": float(self.option("learning_rate", 1e-3)),
               "reset_dead_codes": str(self.option("reset_dead_codes", True)).lower() in ("true", "1", "yes"),
               "aligned": str(self.option("aligned", True)).lower() in ("true", "1", "yes"),
-              "threads": int(self.option("threads", 1))}
+              "threads": int(self.option("threads", 1)),
+              "scale_floor": float(self.option("scale_floor", DEFAULT_FLOOR))}
         for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
             if st[name] < 1:
                 raise GeneratorError(f"{name} must be a positive integer, got {st[name]}", field=name)
@@ -158,7 +161,8 @@ class Gesture2Vec(Generator):
         stages = G2VStages(dae_epochs=st["dae_epochs"], vq_epochs=st["vq_epochs"],
                            vq_decoder_epochs=st["vq_decoder_epochs"], translation_epochs=st["translation_epochs"],
                            learning_rate=st["learning_rate"], translation_learning_rate=st["learning_rate"],
-                           batch_size=st["batch_size"], reset_dead_codes=st["reset_dead_codes"])
+                           batch_size=st["batch_size"], reset_dead_codes=st["reset_dead_codes"],
+                           scale_floor=st["scale_floor"])
         model = train_gesture2vec(poses, words, config, rep.fps, stages, seed=seed, val_poses=vposes,
                                   val_words=vwords, budget_seconds=budget_seconds(budget_minutes), on_epoch=progress)
         rep.save(out_dir)

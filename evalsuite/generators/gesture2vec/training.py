@@ -21,6 +21,7 @@ import torch
 from torch import nn
 
 from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
+from evalsuite.generators.scaling import floored_spread
 
 __all__ = ["G2VStages", "TrainedG2V", "train_gesture2vec", "generate_gesture2vec", "code_perplexity",
            "WordTrack", "latent_windows"]
@@ -38,6 +39,7 @@ class G2VStages:
     translation_learning_rate: float = 1e-3
     batch_size: int = 128
     reset_dead_codes: bool = True        # codes unused in a VQ epoch restart at a random chunk's encoding
+    scale_floor: float = 0.0             # a dimension's range is at least this fraction of the widest one's
     budget_shares: tuple[float, float, float] = (0.10, 0.45, 0.45)
 
 
@@ -156,7 +158,9 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
 
     allp = np.concatenate(poses)
     mean = allp.mean(0)
-    scale = np.maximum(np.abs(allp - mean).max(0), 1e-6)  # mean 0, max |x| 1 (paper §4.1)
+    # mean 0, max |x| 1 (paper §4.1), but a rotation-matrix entry that hardly moves (idle sway) is not stretched
+    # to +-1 (evalsuite.generators.scaling)
+    scale = floored_spread(np.abs(allp - mean).max(0), stages.scale_floor)
     norm = [((p - mean) / scale).astype(np.float32) for p in poses]
     vnorm = [((p - mean) / scale).astype(np.float32) for p in val_poses]
     # 1. frame autoencoder
@@ -268,6 +272,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
                 vt = torch.from_numpy(np.stack(vtgts).astype(np.int64))
                 logits = translator(wx, mask, vt, torch.from_numpy(np.stack(val_al)))
                 rec["val_loss"] = ce(logits.reshape(-1, config.codebook), vt.reshape(-1)).item()
+                rec["val_code_error"] = float((logits.argmax(-1) != vt).float().mean())
         stop = out_of_time(2, rec, "translation")
         log(rec)
         if stop:
