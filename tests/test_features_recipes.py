@@ -203,3 +203,28 @@ def test_errors_name_the_file_the_recipe_and_the_option(tmp_path, wav44):
         extract("energy", (np.zeros(100), 0), cache=False)
     with pytest.raises(InputError, match=r"transcript: recipe 'text_timing' computes text features"):
         extract("text_timing", wav44, cache=False)
+
+
+@pytest.mark.parametrize("n, rate, options", [
+    (44100 * 3 + 7, 44100, {"winlen": 0.06666666666, "winstep": 0.0166666666, "numcep": 26}),   # the demo's
+    (16000 * 2 + 13, 16000, {"winlen": 0.02, "winstep": 0.01, "numcep": 26, "nfft": 1024}),     # Kucherenko's
+    (96000, 96000, {"winlen": 0.02, "winstep": 0.01, "numcep": 26, "nfft": 1024}),   # frames truncated to nfft
+    (100, 16000, {"winlen": 0.02, "winstep": 0.01, "numcep": 13}),                   # shorter than one frame
+])
+def test_psf_mfcc_with_strided_frames_is_bit_identical_to_the_library(n, rate, options):
+    import logging
+    import warnings
+
+    from python_speech_features import mfcc
+
+    from evalsuite.features.mfcc import psf_mfcc
+
+    x = np.random.default_rng(n).integers(-3000, 3000, n).astype(np.int16) / 2
+    logging.disable(logging.WARNING)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            expected = mfcc(x, samplerate=rate, **options)
+    finally:
+        logging.disable(logging.NOTSET)
+    np.testing.assert_array_equal(psf_mfcc(x, rate, **options), expected)

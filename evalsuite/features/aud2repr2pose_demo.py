@@ -18,6 +18,7 @@ Shapes: :func:`demo_features` -> ``(N, 30)``; :func:`demo_windows` -> ``(N, 61, 
 """
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass
 
@@ -64,6 +65,11 @@ def demo_mfcc(path: str | os.PathLike[str]) -> np.ndarray:
 
 def silence_row() -> np.ndarray:
     """``(30,)`` padding row: MFCC frame 0 of silence at 44.1 kHz, then four zero prosody values."""
+    return _silence_row().copy()
+
+
+@functools.lru_cache(maxsize=1)
+def _silence_row() -> np.ndarray:
     frame = _mfcc(np.zeros(int(round(WINLEN * PAD_RATE)) + 1, dtype=np.int16), PAD_RATE)[0]
     return np.concatenate([frame, np.zeros(4)])
 

@@ -21,6 +21,7 @@ its analysis window centred on each MFCC window's centre. 100 fps native; ``fps=
 from __future__ import annotations
 
 import logging
+import math
 import warnings
 
 import numpy as np
@@ -36,20 +37,46 @@ class _TruncationNotice(logging.Filter):
         return "greater than FFT size" not in record.getMessage()
 
 
-def psf_mfcc(signal: np.ndarray, rate: int, **kwargs) -> np.ndarray:
-    """``python_speech_features.mfcc`` with its frame-truncation notice silenced (it is part of the recipes)."""
+def _frames(signal: np.ndarray, frame_len: int, frame_step: int) -> np.ndarray:
+    """``python_speech_features.sigproc.framesig`` (no window) as a strided view: the same frames, zero-padded
+    at the end the same way, without building an index array of every sample of every frame."""
+    n = 1 if len(signal) <= frame_len else 1 + int(math.ceil((1.0 * len(signal) - frame_len) / frame_step))
+    padded = np.concatenate((signal, np.zeros((n - 1) * frame_step + frame_len - len(signal))))
+    return np.lib.stride_tricks.sliding_window_view(padded, frame_len)[::frame_step][:n]
+
+
+def psf_mfcc(signal: np.ndarray, rate: int, *, winlen: float = 0.025, winstep: float = 0.01, numcep: int = 13,
+             nfilt: int = 26, nfft: int = 512, preemph: float = 0.97, ceplifter: int = 22) -> np.ndarray:
+    """``python_speech_features.mfcc`` (its defaults, rectangular window, log energy in column 0), computed from
+    the library's own steps (pre-emphasis, power spectrum, mel filterbank, DCT, lifter) with strided framing,
+    which is several times faster on long files and gives the same numbers (tests/test_features_recipes.py);
+    its notice that a frame longer than ``nfft`` is truncated is silenced (the truncation is part of the
+    recipes)."""
     try:
-        from python_speech_features import mfcc
+        from python_speech_features import sigproc
+        from python_speech_features.base import get_filterbanks, lifter
     except ImportError:  # pragma: no cover - a dependency of evalsuite
         raise InputError("MFCC recipes need python_speech_features: pip install python-speech-features") from None
+    from scipy.fftpack import dct
+
     notice = _TruncationNotice()
     logging.getLogger().addFilter(notice)
     try:
         with warnings.catch_warnings():   # python_speech_features calls the deprecated logging.warn
             warnings.filterwarnings("ignore", "The 'warn' function is deprecated", DeprecationWarning)
-            return np.asarray(mfcc(signal, samplerate=rate, **kwargs), dtype=np.float64)
+            emphasised = sigproc.preemphasis(np.asarray(signal), preemph)
+            frames = _frames(emphasised, sigproc.round_half_up(winlen * rate), sigproc.round_half_up(winstep * rate))
+            pspec = sigproc.powspec(frames, nfft)
     finally:
         logging.getLogger().removeFilter(notice)
+    eps = np.finfo(float).eps
+    energy = np.sum(pspec, 1)
+    energy = np.where(energy == 0, eps, energy)
+    feat = np.dot(pspec, get_filterbanks(nfilt, nfft, rate, 0, rate / 2).T)
+    feat = dct(np.log(np.where(feat == 0, eps, feat)), type=2, axis=1, norm="ortho")[:, :numcep]
+    feat = lifter(feat, ceplifter)
+    feat[:, 0] = np.log(energy)
+    return np.asarray(feat, dtype=np.float64)
 
 
 def original_mix(audio: Audio) -> np.ndarray:

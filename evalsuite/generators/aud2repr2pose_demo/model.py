@@ -64,6 +64,16 @@ def hard_sigmoid_keras2(x: np.ndarray) -> np.ndarray:
     return np.clip(np.float32(0.2) * x + np.float32(0.5), 0.0, 1.0).astype(np.float32)
 
 
+def _distinct_frames(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(T, W, F) windows -> (distinct frames (N, F), index (T, W) of each window position's frame). Windows that
+    slide by one frame over one sequence (what the demo's recipe makes) are recognised without sorting."""
+    if len(x) > 1 and np.array_equal(x[1:, :-1], x[:-1, 1:]):
+        frames = np.concatenate([x[:, 0], x[-1, 1:]])
+        return frames, np.arange(x.shape[0])[:, None] + np.arange(x.shape[1])[None, :]
+    frames, where = np.unique(x.reshape(-1, x.shape[2]), axis=0, return_inverse=True)
+    return frames, where.reshape(x.shape[:2])
+
+
 def _batch_norm(x: np.ndarray, p: dict[str, np.ndarray], eps: float) -> np.ndarray:
     inv = (p["gamma"] / np.sqrt(p["moving_variance"] + np.float32(eps))).astype(np.float32)
     return ((x - p["moving_mean"]) * inv + p["beta"]).astype(np.float32)
@@ -135,13 +145,17 @@ class SpeechEncoder:
         if x.ndim != 3 or x.shape[2] != FEATURE_DIM:
             raise InputError(f"speech windows: expected shape (T, {CONTEXT}, {FEATURE_DIM}), got {x.shape}")
         (td1, p1), (bn1, q1), (td2, p2), (bn2, q2), (_, g) = self._layers()[:5]
-        h = np.maximum(_batch_norm(x @ p1["kernel"] + p1["bias"], q1, self.bn_epsilon[bn1]), 0)
+        # Every layer before the recurrence works frame by frame, and each feature frame stands in up to 61
+        # overlapping windows: compute those layers once per distinct frame (about 60x less work), then
+        # gather. Row by row the arithmetic is the same.
+        frames, where = _distinct_frames(x)
+        h = np.maximum(_batch_norm(frames @ p1["kernel"] + p1["bias"], q1, self.bn_epsilon[bn1]), 0)
         h = np.maximum(_batch_norm(h @ p2["kernel"] + p2["bias"], q2, self.bn_epsilon[bn2]), 0)
         units = g["recurrent_kernel"].shape[0]
         wz, wr, wh = np.split(g["kernel"], 3, axis=1)           # Keras gate order: z, r, h
         uz, ur, uh = np.split(g["recurrent_kernel"], 3, axis=1)
         bz, br, bh = np.split(g["bias"], 3)
-        xz, xr, xh = h @ wz + bz, h @ wr + br, h @ wh + bh       # (T, 61, units) each
+        xz, xr, xh = ((h @ w + b)[where] for w, b in ((wz, bz), (wr, br), (wh, bh)))   # (T, 61, units) each
         state = np.zeros((x.shape[0], units), dtype=np.float32)
         for t in range(x.shape[1]):
             z = hard_sigmoid_keras2(xz[:, t] + state @ uz)
