@@ -61,3 +61,18 @@ def test_aud2_plugins_name_a_bad_schedule():
         g._settings()
     g.configure({})
     assert g._settings()["lr_schedule"] == "constant" and g._settings()["scale_floor"] == DEFAULT_FLOOR
+
+
+@pytest.mark.parametrize("name", ["aud2pose", "aud2motion", "aud2repr2pose", "gesticulator", "gesture2vec",
+                                  "ferstl-mogan"])
+@pytest.mark.parametrize("value, message", [(1.5, r"scale_floor must be in \[0, 1\), got 1.5"),
+                                            ("wide", "scale_floor must be a number")])
+def test_every_reimplementation_names_a_bad_scale_floor(name, value, message):
+    from evalsuite.generators import GeneratorError, find_generator
+    from evalsuite.generators.registry import generator_class
+
+    g = generator_class(find_generator(name).target)()
+    g.configure({"scale_floor": value})
+    with pytest.raises(GeneratorError, match=message) as err:
+        g._settings()
+    assert err.value.field == "scale_floor"

@@ -35,7 +35,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
 
 __all__ = ["Aud2Pose", "Aud2Motion", "Aud2Repr2Pose"]
 
@@ -93,7 +93,7 @@ class _Aud2(Generator):
                 "patience": int(self.option("patience", 25)),
                 "batch_size": int(self.option("batch_size", 2056 if windowed else 16)),
                 "learning_rate": float(self.option("learning_rate", 1e-3)), "threads": int(self.option("threads", 1)),
-                "scale_floor": float(self.option("scale_floor", DEFAULT_FLOOR)),
+                "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR)),
                 "lr_schedule": schedule}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,

@@ -38,7 +38,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
 
 __all__ = ["FerstlMogan", "ABLATIONS"]
 
@@ -115,7 +115,7 @@ class FerstlMogan(Generator):
                 "learning_rate": float(self.option("learning_rate", 1e-3)),
                 "adversarial_learning_rate": float(self.option("adversarial_learning_rate", 5e-4)),
                 "threads": int(self.option("threads", 1)),
-                "scale_floor": float(self.option("scale_floor", DEFAULT_FLOOR))}
+                "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR))}
 
     # -- training ------------------------------------------------------------------------------------------
     def _arrays(self, segs: Sequence[Segment], rep: PoseRepresentation, use_corpus_labels: bool):

@@ -35,6 +35,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
+from evalsuite.generators.scaling import scale_floor_option
 
 __all__ = ["Gesticulator"]
 
@@ -114,7 +115,7 @@ class Gesticulator(Generator):
                 "past": int(self.option("past", 10)), "future": int(self.option("future", 20)),
                 "dropout": float(self.option("dropout", 0.5)), "weight_decay": float(self.option("weight_decay", 1e-3)),
                 "prev_pose_dropout": float(self.option("prev_pose_dropout", 0.8)),
-                "scale_floor": float(self.option("scale_floor", 0.0))}
+                "scale_floor": scale_floor_option(self.option("scale_floor", 0.0))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:

@@ -41,7 +41,7 @@ from evalsuite.generators.reimpl import (
     weights_sha256,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
 
 __all__ = ["Gesture2Vec", "code_usage", "SIZES"]
 
@@ -127,7 +127,7 @@ class Gesture2Vec(Generator):
               "reset_dead_codes": str(self.option("reset_dead_codes", True)).lower() in ("true", "1", "yes"),
               "aligned": str(self.option("aligned", True)).lower() in ("true", "1", "yes"),
               "threads": int(self.option("threads", 1)),
-              "scale_floor": float(self.option("scale_floor", DEFAULT_FLOOR))}
+              "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR))}
         for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
             if st[name] < 1:
                 raise GeneratorError(f"{name} must be a positive integer, got {st[name]}", field=name)
