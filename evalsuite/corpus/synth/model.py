@@ -197,7 +197,7 @@ def oracle_motion(transcript: Transcript, duration: float, seed: int, emphasis: 
     """The speaker model's motion for ``transcript`` (``duration`` s at ``params.fps``) and its labels.
 
     ``emphasis``: one flag per word (default: none emphasised). ``onsets``: per word, the times (s after
-    its start) of the acoustic onsets in it, where the baton's circling stops and restarts (default:
+    its start) of the acoustic onsets in it, where one baton flick ends and the next begins (default:
     :func:`syllable_onsets`; a synthetic corpus stores the onsets of its speech). With a segment's own motion seed and
     emphasis (corpus.json) this reproduces the corpus's motion exactly; another seed gives another
     performance of the same speech.
