@@ -36,6 +36,7 @@ from evalsuite.generators.reimpl import (
     write_json,
 )
 from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
+from evalsuite.generators.schedules import SCHEDULES
 
 __all__ = ["Aud2Pose", "Aud2Motion", "Aud2Repr2Pose"]
 
@@ -79,7 +80,7 @@ class _Aud2(Generator):
         for name, value, allowed in (("form", form, ("sequence", "windowed")),
                                      ("representation", rep, ("expmap", "positions")),
                                      ("features", feats, ("mfcc", "mfcc+prosody")),
-                                     ("lr_schedule", schedule, ("constant", "cosine"))):
+                                     ("lr_schedule", schedule, SCHEDULES)):
             if value not in allowed:
                 raise GeneratorError(f"{name} must be one of {', '.join(allowed)}, got {value!r}", field=name)
         windowed = form == "windowed"
