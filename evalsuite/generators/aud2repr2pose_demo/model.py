@@ -75,8 +75,14 @@ def _distinct_frames(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _batch_norm(x: np.ndarray, p: dict[str, np.ndarray], eps: float) -> np.ndarray:
-    inv = (p["gamma"] / np.sqrt(p["moving_variance"] + np.float32(eps))).astype(np.float32)
-    return ((x - p["moving_mean"]) * inv + p["beta"]).astype(np.float32)
+    """Keras inference-mode batch norm in TensorFlow's order, x * inv + (beta - mean * inv) with
+    inv = rsqrt(var + eps) * gamma (``tf.nn.batch_normalization``), not (x - mean) * inv + beta: the same
+    formula, but float32 rounds the two differently. rsqrt is taken correctly rounded. Measured on the demo's
+    golden GRU states, this order brings the codes from 8.5e-7 to 2.7e-7 of Keras's."""
+    f32 = np.float32
+    rsqrt = (1.0 / np.sqrt((p["moving_variance"] + f32(eps)).astype(f32).astype(np.float64))).astype(f32)
+    inv = (rsqrt * p["gamma"]).astype(f32)
+    return (x * inv + (p["beta"] - (p["moving_mean"] * inv).astype(f32)).astype(f32)).astype(f32)
 
 
 @dataclass
@@ -166,7 +172,10 @@ class SpeechEncoder:
 
     def __call__(self, windows: np.ndarray) -> np.ndarray:
         """(T, 61, 30) float windows -> (T, 112) float32 motion codes."""
-        state = self.gru_states(windows)
+        return self.codes_from_gru_states(self.gru_states(windows))
+
+    def codes_from_gru_states(self, state: np.ndarray) -> np.ndarray:
+        """(T, 128) GRU last states -> (T, 112) codes: BN -> ReLU -> Dense."""
         (bn3, q3), (_, d) = self._layers()[5:7]
         h = np.maximum(_batch_norm(state, q3, self.bn_epsilon[bn3]), 0)
         return (h @ d["kernel"] + d["bias"]).astype(np.float32)
