@@ -88,7 +88,7 @@ class ExternalCommand(Generator):
         request_path = out_dir / "request.json"
         request_path.write_text(json.dumps(request_payload(req, out_dir), indent=1), encoding="utf-8")
         argv = self._argv(request_path, out_dir)
-        timeout = float(self.option("timeout_s", 600))
+        timeout = self.float_option("timeout_s", 600)
         where = f"{self.spec.name}, segment {req.segment_id!r}"
         try:
             proc = subprocess.run(argv, cwd=self.option("cwd") or out_dir, env={**os.environ, **self.env},

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import abc
 import dataclasses
+import math
 import pathlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -197,3 +198,43 @@ class Generator(abc.ABC):
     # -- helpers for subclasses ----------------------------------------------------------------------
     def option(self, name: str, default: Any = None) -> Any:
         return self.config.get(name, default)
+
+    def int_option(self, name: str, default: int | None = None) -> int:
+        """An integer option; anything else (``--set epochs=ten``, 2.5) is a GeneratorError naming the field."""
+        value = self.option(name, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            raise GeneratorError(f"{self.spec.name}: option {name} must be an integer, got {value!r}", field=name)
+        try:
+            number = float(value)
+        except ValueError:
+            raise GeneratorError(f"{self.spec.name}: option {name} must be an integer, got {value!r}",
+                                 field=name) from None
+        if not number.is_integer():
+            raise GeneratorError(f"{self.spec.name}: option {name} must be an integer, got {value!r}", field=name)
+        return int(number)
+
+    def float_option(self, name: str, default: float | None = None) -> float:
+        """A finite number option; anything else is a GeneratorError naming the field."""
+        value = self.option(name, default)
+        try:
+            if isinstance(value, bool):
+                raise ValueError
+            number = float(value)
+        except (TypeError, ValueError):
+            raise GeneratorError(f"{self.spec.name}: option {name} must be a number, got {value!r}",
+                                 field=name) from None
+        if not math.isfinite(number):
+            raise GeneratorError(f"{self.spec.name}: option {name} must be a finite number, got {value!r}", field=name)
+        return number
+
+    def bool_option(self, name: str, default: bool = False) -> bool:
+        """true/false (also 1/0, yes/no, as --set gives them); anything else is a GeneratorError naming the field."""
+        value = self.option(name, default)
+        if isinstance(value, bool):
+            return value
+        text = str(value).strip().lower()
+        if text in ("true", "1", "yes"):
+            return True
+        if text in ("false", "0", "no"):
+            return False
+        raise GeneratorError(f"{self.spec.name}: option {name} must be true or false, got {value!r}", field=name)

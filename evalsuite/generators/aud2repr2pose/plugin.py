@@ -89,11 +89,11 @@ class _Aud2(Generator):
                                  "frame of a chunk); form=windowed would make it a centred-window model that sees "
                                  "the future", field="form")
         return {"form": form, "representation": rep, "features": feats,
-                "width": int(self.option("width", 64)), "code_dim": int(self.option("code_dim", 40)),
-                "epochs": int(self.option("epochs", 300)), "dae_epochs": int(self.option("dae_epochs", 20)),
-                "patience": int(self.option("patience", 25)),
-                "batch_size": int(self.option("batch_size", 2056 if windowed else 16)),
-                "learning_rate": float(self.option("learning_rate", 1e-3)), "threads": int(self.option("threads", 1)),
+                "width": self.int_option("width", 64), "code_dim": self.int_option("code_dim", 40),
+                "epochs": self.int_option("epochs", 300), "dae_epochs": self.int_option("dae_epochs", 20),
+                "patience": self.int_option("patience", 25),
+                "batch_size": self.int_option("batch_size", 2056 if windowed else 16),
+                "learning_rate": self.float_option("learning_rate", 1e-3), "threads": self.int_option("threads", 1),
                 "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR)),
                 "lr_schedule": schedule}
 

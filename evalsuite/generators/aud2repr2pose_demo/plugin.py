@@ -60,7 +60,7 @@ class Aud2Repr2PoseDemoGenerator(Generator):
         from evalsuite.generators.aud2repr2pose_demo.model import Aud2Repr2PoseDemo
 
         assert model_dir is not None
-        keep = float(self.option("dropout_keep_prob", 1.0))
+        keep = self.float_option("dropout_keep_prob", 1.0)
         if not 0.0 < keep <= 1.0:
             raise GeneratorError(f"dropout_keep_prob must be in (0, 1], got {keep}", field="dropout_keep_prob")
         self.keep_prob = keep
@@ -79,7 +79,7 @@ class Aud2Repr2PoseDemoGenerator(Generator):
             raise GeneratorError(f"aud2repr2pose-demo, segment {request.segment_id!r}: needs audio")
         windows = demo_windows(demo_features(request.audio))
         points = self.model(windows, keep_prob=self.keep_prob, seed=request.seed if self.stochastic else None,
-                            drop_tail=bool(self.option("drop_tail", True)), smooth=bool(self.option("smooth", True)))
+                            drop_tail=self.bool_option("drop_tail", True), smooth=self.bool_option("smooth", True))
         n = int(round(request.duration * 20.0))
         held = max(0, n - len(points))
         if held:

@@ -41,7 +41,7 @@ class _Degradation(Generator):
     defaults: ClassVar[dict[str, float]] = {}
 
     def param(self, name: str) -> float:
-        return float(self.option(name, self.defaults[name]))
+        return self.float_option(name, self.defaults[name])
 
     @abc.abstractmethod
     def degrade(self, rv: np.ndarray, motion: Motion, rng: np.random.Generator) -> np.ndarray:

@@ -71,7 +71,7 @@ class Mismatched(Generator):
             raise GeneratorError("mismatched needs at least two segments")
         order = sorted(range(len(requests)), key=lambda i: (requests[i].duration, requests[i].segment_id))
         rng = np.random.default_rng(requests[0].seed)  # the run's seed for this sample, derived per first segment
-        shift = choose_shift([requests[i].duration for i in order], rng, float(self.option("tolerance", 0.2)))
+        shift = choose_shift([requests[i].duration for i in order], rng, self.float_option("tolerance", 0.2))
         out: list[GenerationResult | None] = [None] * len(requests)
         for pos, i in enumerate(order):
             donor = order[(pos + shift) % len(order)]

@@ -66,7 +66,7 @@ class Oracle(Generator):
     def generate(self, request: GenerationRequest) -> GenerationResult:
         from evalsuite.corpus.synth.oracle import segment_oracle
 
-        seed = None if self.option("same_seed") else request.seed
+        seed = None if self.bool_option("same_seed", False) else request.seed
         try:
             motion, _ = segment_oracle(self.corpus, request.segment_id, seed=seed, params=self.params)
         except KeyError:
@@ -76,4 +76,4 @@ class Oracle(Generator):
 
     @property
     def stochastic(self) -> bool:
-        return not self.option("same_seed")
+        return not self.bool_option("same_seed", False)

@@ -55,9 +55,9 @@ class RandomSegments(Generator):
     def _one(self, req: GenerationRequest, pool: list[Motion]) -> GenerationResult:
         rng = np.random.default_rng(req.seed)
         fps = req.fps
-        cmin, cmax = float(self.option("clip_min", 2.0)), float(self.option("clip_max", 4.0))
-        fade = max(1, int(round(float(self.option("fade", 0.5)) * fps)))
-        n_cand = int(self.option("candidates", 16))
+        cmin, cmax = self.float_option("clip_min", 2.0), self.float_option("clip_max", 4.0)
+        fade = max(1, int(round(self.float_option("fade", 0.5) * fps)))
+        n_cand = self.int_option("candidates", 16)
         template = pool[0]
         frames: np.ndarray | None = None
         clips = []

@@ -54,6 +54,10 @@ class MoganStages:
     batch_size: int = 32
     learning_rate: float = 1e-3
     adversarial_learning_rate: float = 1e-4
+    # RMSprop rate of the discriminators in adversarial training; None: adversarial_learning_rate. The paper gives
+    # no rates. At the generator's rate the discriminators won within 100 steps (displacement accuracy 97-100 %)
+    # and the generator's motion shrank below the MSE-only model's (div_k 1.3 against 2.9, natural 10.3).
+    discriminator_learning_rate: float | None = None
     discontinuity_weight: float = 1.0
     scale_floor: float = 0.0           # a position's std is at least this fraction of the widest one's
     discriminators: tuple[str, ...] = ("phase", "realism", "minibatch", "displacement")  # ablations drop some
@@ -265,6 +269,10 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
             f_opt.step()
         log({"stage": "realism discriminator pre-training", "steps": stages.realism_pretrain_steps})
     # (5) adversarial training
+    if stages.discriminator_learning_rate is not None:
+        for d_opt in d_opts.values():
+            for group in d_opt.param_groups:
+                group["lr"] = stages.discriminator_learning_rate
     gen.set_phase("adversarial")
     g_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
     mse_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)

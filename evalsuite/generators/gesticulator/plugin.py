@@ -106,15 +106,15 @@ class Gesticulator(Generator):
         if lr_schedule not in ("cosine", "constant"):
             raise GeneratorError(f"lr_schedule must be cosine or constant, got {lr_schedule!r}", field="lr_schedule")
         return {"inputs": inputs, "size": size, "words": str(self.option("words", "minilm-static")),
-                "autoregressive": bool(self.option("autoregressive", True)), "film": bool(self.option("film", True)),
-                "epochs": int(self.option("epochs", 60)), "threads": int(self.option("threads", 1)),
-                "patience": self.option("patience"),
-                "batch_size": int(self.option("batch_size", 64)),
-                "learning_rate": float(self.option("learning_rate", 1e-3)),
+                "autoregressive": self.bool_option("autoregressive", True), "film": self.bool_option("film", True),
+                "epochs": self.int_option("epochs", 60), "threads": self.int_option("threads", 1),
+                "patience": None if self.option("patience") is None else self.int_option("patience"),
+                "batch_size": self.int_option("batch_size", 64),
+                "learning_rate": self.float_option("learning_rate", 1e-3),
                 "lr_schedule": str(self.option("lr_schedule", "cosine")),
-                "past": int(self.option("past", 10)), "future": int(self.option("future", 20)),
-                "dropout": float(self.option("dropout", 0.5)), "weight_decay": float(self.option("weight_decay", 1e-3)),
-                "prev_pose_dropout": float(self.option("prev_pose_dropout", 0.8)),
+                "past": self.int_option("past", 10), "future": self.int_option("future", 20),
+                "dropout": self.float_option("dropout", 0.5), "weight_decay": self.float_option("weight_decay", 1e-3),
+                "prev_pose_dropout": self.float_option("prev_pose_dropout", 0.8),
                 "scale_floor": scale_floor_option(self.option("scale_floor", 0.0))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
@@ -171,7 +171,7 @@ class Gesticulator(Generator):
     def _speech(self, req: GenerationRequest) -> np.ndarray:
         speech = request_arrays(req, self.rep.fps, audio_recipe=self.saved["audio_recipe"], words=self.saved["words"],
                                 name=self.spec.name).speech
-        if self.option("zero_audio"):  # the training mean: zero after standardisation
+        if self.bool_option("zero_audio", False):  # the training mean: zero after standardisation
             a = int(self.saved["net"]["audio_dim"])
             speech[:, :a] = self.model.speech_norm.mean[:a]
         return speech

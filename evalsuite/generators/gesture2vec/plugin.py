@@ -60,8 +60,10 @@ MY_DEVIATIONS = (
     "stops the stages in order.",
     "Codes unused in a VQ-DVAE epoch restart at the encoding of a random training chunk (dead-code reset; "
     "the paper reports no collapse handling), so that small corpora use the codebook.",
-    "Translation windows are 4 chunks (120 frames at 20 fps, the repository's sentence_frame_length) cut every "
-    "chunk from the transcript's word timings; the paper aligned its words with Gentle.",
+    "Translation windows are 4 chunks (120 frames at 20 fps, the repository's sentence_frame_length) cut from "
+    "the transcript's word timings (the paper aligned its words with Gentle); in training one starts every "
+    "'stride' frames (10), so windows overlap: three times the pairs of non-overlapping windows, which small "
+    "corpora need (lexical contrast 0.26 -> 0.62 x natural's on the 30-minute synthetic corpus).",
 )
 
 
@@ -117,16 +119,16 @@ class Gesture2Vec(Generator):
         if decoding not in ("generative", "retrieval"):
             raise GeneratorError(f"decoding must be generative or retrieval, got {decoding!r}", field="decoding")
         st: dict[str, Any] = {"size": size, "decoding": decoding, "words": str(self.option("words", "minilm-static")),
-              "temperature": float(self.option("temperature", 0.0)), "codebook": int(self.option("codebook", 300)),
-              "chunk": int(self.option("chunk", 30)), "stride": int(self.option("stride", 10)),
-              "dae_epochs": int(self.option("dae_epochs", 10)), "vq_epochs": int(self.option("vq_epochs", 15)),
-              "vq_decoder_epochs": int(self.option("vq_decoder_epochs", 10)),
-              "translation_epochs": int(self.option("translation_epochs", 60)),
-              "batch_size": int(self.option("batch_size", 128)),
-              "learning_rate": float(self.option("learning_rate", 1e-3)),
-              "reset_dead_codes": str(self.option("reset_dead_codes", True)).lower() in ("true", "1", "yes"),
-              "aligned": str(self.option("aligned", True)).lower() in ("true", "1", "yes"),
-              "threads": int(self.option("threads", 1)),
+              "temperature": self.float_option("temperature", 0.0), "codebook": self.int_option("codebook", 300),
+              "chunk": self.int_option("chunk", 30), "stride": self.int_option("stride", 10),
+              "dae_epochs": self.int_option("dae_epochs", 10), "vq_epochs": self.int_option("vq_epochs", 15),
+              "vq_decoder_epochs": self.int_option("vq_decoder_epochs", 10),
+              "translation_epochs": self.int_option("translation_epochs", 60),
+              "batch_size": self.int_option("batch_size", 128),
+              "learning_rate": self.float_option("learning_rate", 1e-3),
+              "reset_dead_codes": self.bool_option("reset_dead_codes", True),
+              "aligned": self.bool_option("aligned", True),
+              "threads": self.int_option("threads", 1),
               "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR))}
         for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
             if st[name] < 1:
@@ -207,7 +209,7 @@ class Gesture2Vec(Generator):
         self.decoding = str(self.option("decoding", "generative"))
         if self.decoding not in ("generative", "retrieval"):
             raise GeneratorError(f"decoding must be generative or retrieval, got {self.decoding!r}", field="decoding")
-        self.temperature = float(self.option("temperature", 0.0))
+        self.temperature = self.float_option("temperature", 0.0)
 
     def generate(self, request: GenerationRequest) -> GenerationResult:
         from evalsuite.generators.gesture2vec.training import generate_gesture2vec

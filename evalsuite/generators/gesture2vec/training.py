@@ -112,14 +112,20 @@ def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequenc
                        fps: float, norm: Sequence[np.ndarray] | None = None,
                        pool: dict[int, list[np.ndarray]] | None = None
                        ) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
-    """Word windows and the codes of their non-overlapping chunks (and, with ``pool``, each code's clips)."""
+    """Word windows and the codes of their non-overlapping chunks (and, with ``pool``, each code's clips).
+
+    A window starts every ``c.stride`` frames (10), the step of the VQ-DVAE's training chunks, not every
+    ``c.chunk`` frames: three times the pairs from one corpus, with each keyword at more offsets within a chunk.
+    On the 30-minute synthetic corpus this raised the generated motion's lexical contrast from 0.26 to 0.62 x
+    natural's (the translator over-fits the paper's K = 300 classes from non-overlapping windows alone)."""
     win = c.chunk * c.chunks_per_window
     srcs: list[np.ndarray] = []
     tgts: list[np.ndarray] = []
     aligned: list[np.ndarray] = []
+    pooled: set[tuple[int, int]] = set()  # (segment, first frame): overlapping windows share chunks
     with torch.no_grad():
         for i, (lat, track) in enumerate(zip(latents, words)):
-            for s in range(0, len(lat) - win + 1, c.chunk):
+            for s in range(0, len(lat) - win + 1, c.stride):
                 feats = _latent_chunks(lat[s:s + win], c.chunk, c.chunk)
                 codes = vq.quantise(vq.encode(torch.from_numpy(feats.astype(np.float32)))).numpy()
                 srcs.append(_window_words(track, s / fps, win / fps, c.text_dim))
@@ -127,7 +133,9 @@ def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequenc
                 tgts.append(codes)
                 if pool is not None and norm is not None:
                     for k, code in enumerate(codes):
-                        pool.setdefault(int(code), []).append(norm[i][s + k * c.chunk:s + (k + 1) * c.chunk])
+                        if (i, s + k * c.chunk) not in pooled:
+                            pooled.add((i, s + k * c.chunk))
+                            pool.setdefault(int(code), []).append(norm[i][s + k * c.chunk:s + (k + 1) * c.chunk])
     return srcs, tgts, aligned
 
 
@@ -241,7 +249,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         log(rec)
         epoch += 1
     vq.eval()
-    # 3. translation: word windows -> codes of the window's non-overlapping chunks
+    # 3. translation: word windows (one every `stride` frames) -> codes of each window's non-overlapping chunks
     train_chunks: dict[int, list[np.ndarray]] = {}
     srcs, tgts, al = _translation_pairs(vq, latents, words, config, fps, norm, train_chunks)
     vsrcs, vtgts, val_al = _translation_pairs(vq, vlatents, val_words, config, fps)

@@ -1,0 +1,36 @@
+"""Typed option accessors of the plug-in contract: a bad --set value is a GeneratorError naming the field."""
+from __future__ import annotations
+
+import pytest
+
+from evalsuite.generators import GeneratorError, find_generator
+from evalsuite.generators.registry import generator_class
+
+
+def _configured(name: str, **config):
+    g = generator_class(find_generator(name).target)()
+    g.configure(config)
+    return g
+
+
+def test_numbers_and_flags_are_parsed_as_the_cli_gives_them():
+    g = _configured("ferstl-mogan", adversarial_steps="40", discriminator_learning_rate="2e-4", width=64)
+    assert g.int_option("adversarial_steps") == 40 and g.int_option("width") == 64
+    assert g.float_option("discriminator_learning_rate") == pytest.approx(2e-4)
+    assert g.int_option("noise_dim", 8) == 8           # the default when not set
+    g = _configured("gesticulator", film="false", autoregressive=True)
+    assert g.bool_option("film", True) is False and g.bool_option("autoregressive", False) is True
+
+
+@pytest.mark.parametrize(("name", "option", "value", "expected"), [
+    ("ferstl-mogan", "discriminator_learning_rate", "abc", "must be a number, got 'abc'"),
+    ("ferstl-mogan", "adversarial_steps", "2.5", "must be an integer"),
+    ("gesture2vec", "codebook", True, "must be an integer"),
+    ("aud2pose", "learning_rate", "nan", "finite number"),
+    ("gesticulator", "film", "maybe", "must be true or false, got 'maybe'"),
+])
+def test_a_bad_value_names_the_option(name, option, value, expected):
+    g = _configured(name, **{option: value})
+    with pytest.raises(GeneratorError, match=expected) as err:
+        g._settings()
+    assert err.value.field == option
