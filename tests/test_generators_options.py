@@ -23,7 +23,7 @@ def test_numbers_and_flags_are_parsed_as_the_cli_gives_them():
 
 
 @pytest.mark.parametrize(("name", "option", "value", "expected"), [
-    ("ferstl-mogan", "discriminator_learning_rate", "abc", "must be a number, got 'abc'"),
+    ("ferstl-mogan", "discriminator_learning_rate", "abc", "must be a finite number, got 'abc'"),
     ("ferstl-mogan", "adversarial_steps", "2.5", "must be an integer"),
     ("gesture2vec", "codebook", True, "must be an integer"),
     ("aud2pose", "learning_rate", "nan", "finite number"),

@@ -30,6 +30,18 @@ OUTPUT_KINDS = ("bvh", "positions", "any")
 UNITS = ("cm", "m", "mm", "in", "dm")
 
 
+def _finite_number(value: Any) -> float | None:
+    """``value`` as a finite float (numbers and numeric strings, as ``--set`` and config files give them), else
+    None; a bool is not a number here."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        return None
+    try:
+        number = float(value)
+    except ValueError:
+        return None
+    return number if math.isfinite(number) else None
+
+
 class GeneratorError(InputError):
     """A plug-in broke a rule of the contract (the message names the plug-in and the segment)."""
 
@@ -202,29 +214,18 @@ class Generator(abc.ABC):
     def int_option(self, name: str, default: int | None = None) -> int:
         """An integer option; anything else (``--set epochs=ten``, 2.5) is a GeneratorError naming the field."""
         value = self.option(name, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-            raise GeneratorError(f"{self.spec.name}: option {name} must be an integer, got {value!r}", field=name)
-        try:
-            number = float(value)
-        except ValueError:
-            raise GeneratorError(f"{self.spec.name}: option {name} must be an integer, got {value!r}",
-                                 field=name) from None
-        if not number.is_integer():
+        number = _finite_number(value)
+        if number is None or not number.is_integer():
             raise GeneratorError(f"{self.spec.name}: option {name} must be an integer, got {value!r}", field=name)
         return int(number)
 
     def float_option(self, name: str, default: float | None = None) -> float:
         """A finite number option; anything else is a GeneratorError naming the field."""
         value = self.option(name, default)
-        try:
-            if isinstance(value, bool):
-                raise ValueError
-            number = float(value)
-        except (TypeError, ValueError):
-            raise GeneratorError(f"{self.spec.name}: option {name} must be a number, got {value!r}",
-                                 field=name) from None
-        if not math.isfinite(number):
-            raise GeneratorError(f"{self.spec.name}: option {name} must be a finite number, got {value!r}", field=name)
+        number = _finite_number(value)
+        if number is None:
+            raise GeneratorError(f"{self.spec.name}: option {name} must be a finite number, got {value!r}",
+                                 field=name)
         return number
 
     def bool_option(self, name: str, default: bool = False) -> bool:
