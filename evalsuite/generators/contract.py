@@ -228,6 +228,14 @@ class Generator(abc.ABC):
                                  field=name)
         return number
 
+    def choice_option(self, name: str, default: str, choices: Sequence[str]) -> str:
+        """One of ``choices`` (a plug-in's named variants: sizes, ablations, schedules); anything else is a
+        GeneratorError naming the field and the choices."""
+        value = str(self.option(name, default))
+        if value not in choices:
+            raise GeneratorError(f"{name} must be one of {', '.join(choices)}, got {value!r}", field=name)
+        return value
+
     def bool_option(self, name: str, default: bool = False) -> bool:
         """true/false (also 1/0, yes/no, as --set gives them); anything else is a GeneratorError naming the field."""
         value = self.option(name, default)

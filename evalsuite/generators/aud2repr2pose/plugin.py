@@ -73,16 +73,10 @@ class _Aud2(Generator):
     system: ClassVar[str]
 
     def _settings(self) -> dict[str, Any]:
-        form = str(self.option("form", "sequence"))
-        rep = str(self.option("representation", "expmap"))
-        feats = str(self.option("features", "mfcc"))
-        schedule = str(self.option("lr_schedule", "constant"))
-        for name, value, allowed in (("form", form, ("sequence", "windowed")),
-                                     ("representation", rep, ("expmap", "positions")),
-                                     ("features", feats, ("mfcc", "mfcc+prosody")),
-                                     ("lr_schedule", schedule, SCHEDULES)):
-            if value not in allowed:
-                raise GeneratorError(f"{name} must be one of {', '.join(allowed)}, got {value!r}", field=name)
+        form = self.choice_option("form", "sequence", ("sequence", "windowed"))
+        rep = self.choice_option("representation", "expmap", ("expmap", "positions"))
+        feats = self.choice_option("features", "mfcc", ("mfcc", "mfcc+prosody"))
+        schedule = self.choice_option("lr_schedule", "constant", SCHEDULES)
         windowed = form == "windowed"
         if windowed and self.system == "aud2motion":
             raise GeneratorError("aud2motion is sequence-level by definition (a causal GRU returning one pose per "

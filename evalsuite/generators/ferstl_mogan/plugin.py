@@ -101,12 +101,8 @@ class FerstlMogan(Generator):
         deviations=CORE_DEVIATIONS + MY_DEVIATIONS + (FLOOR_DEVIATION,))
 
     def _settings(self) -> dict[str, Any]:
-        ablation = str(self.option("ablation", "none"))
-        if ablation not in ABLATIONS:
-            raise GeneratorError(f"ablation must be one of {', '.join(ABLATIONS)}, got {ablation!r}", field="ablation")
-        labels = str(self.option("phase_labels", "corpus"))
-        if labels not in ("corpus", "heuristic"):
-            raise GeneratorError(f"phase_labels must be corpus or heuristic, got {labels!r}", field="phase_labels")
+        ablation = self.choice_option("ablation", "none", tuple(ABLATIONS))
+        labels = self.choice_option("phase_labels", "corpus", ("corpus", "heuristic"))
         return {"ablation": ablation, "phase_labels": labels, "width": self.int_option("width", 128),
                 "discriminator_width": self.int_option("discriminator_width", 64),
                 "noise_dim": self.int_option("noise_dim", 8),

@@ -19,7 +19,6 @@ from evalsuite.generators.contract import (
     GenerationRequest,
     GenerationResult,
     Generator,
-    GeneratorError,
     GeneratorSpec,
     TrainingResult,
 )
@@ -36,6 +35,7 @@ from evalsuite.generators.reimpl import (
     write_json,
 )
 from evalsuite.generators.scaling import scale_floor_option
+from evalsuite.generators.schedules import SCHEDULES
 
 __all__ = ["Gesticulator"]
 
@@ -96,22 +96,16 @@ class Gesticulator(Generator):
 
     # -- training ------------------------------------------------------------------------------------------
     def _settings(self) -> dict[str, Any]:
-        inputs = str(self.option("inputs", "audio+text"))
-        if inputs not in ("audio+text", "audio", "text"):
-            raise GeneratorError(f"inputs must be audio+text, audio or text, got {inputs!r}", field="inputs")
-        size = str(self.option("size", "cpu"))
-        if size not in SIZES:
-            raise GeneratorError(f"size must be one of {', '.join(SIZES)}, got {size!r}", field="size")
-        lr_schedule = str(self.option("lr_schedule", "cosine"))
-        if lr_schedule not in ("cosine", "constant"):
-            raise GeneratorError(f"lr_schedule must be cosine or constant, got {lr_schedule!r}", field="lr_schedule")
+        inputs = self.choice_option("inputs", "audio+text", ("audio+text", "audio", "text"))
+        size = self.choice_option("size", "cpu", tuple(SIZES))
+        lr_schedule = self.choice_option("lr_schedule", "cosine", SCHEDULES)
         return {"inputs": inputs, "size": size, "words": str(self.option("words", "minilm-static")),
                 "autoregressive": self.bool_option("autoregressive", True), "film": self.bool_option("film", True),
                 "epochs": self.int_option("epochs", 60), "threads": self.int_option("threads", 1),
                 "patience": None if self.option("patience") is None else self.int_option("patience"),
                 "batch_size": self.int_option("batch_size", 64),
                 "learning_rate": self.float_option("learning_rate", 1e-3),
-                "lr_schedule": str(self.option("lr_schedule", "cosine")),
+                "lr_schedule": lr_schedule,
                 "past": self.int_option("past", 10), "future": self.int_option("future", 20),
                 "dropout": self.float_option("dropout", 0.5), "weight_decay": self.float_option("weight_decay", 1e-3),
                 "prev_pose_dropout": self.float_option("prev_pose_dropout", 0.8),

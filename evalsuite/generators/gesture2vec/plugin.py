@@ -112,9 +112,7 @@ class Gesture2Vec(Generator):
 
     # -- options -------------------------------------------------------------------------------------------
     def _settings(self) -> dict[str, Any]:
-        size = str(self.option("size", "cpu"))
-        if size not in SIZES:
-            raise GeneratorError(f"size must be one of {', '.join(SIZES)}, got {size!r}", field="size")
+        size = self.choice_option("size", "cpu", tuple(SIZES))
         decoding = str(self.option("decoding", "generative"))
         if decoding not in ("generative", "retrieval"):
             raise GeneratorError(f"decoding must be generative or retrieval, got {decoding!r}", field="decoding")
