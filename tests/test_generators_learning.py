@@ -78,3 +78,22 @@ def test_training_twice_with_one_seed_gives_the_same_weights(corpus, tmp_path_fa
         model = _trained(name, corpus, tmp_path_factory, None, **options)
         hashes.append(json.loads((model / "model.json").read_text())["weights_sha256"])
     assert hashes[0] == hashes[1]
+
+
+def test_natural_motion_through_20_fps_keeps_its_poses_but_loses_energy_coupling(corpus, tmp_path):
+    """The benchmark's reference row: what a perfect 20-fps model would output. Its poses and keyword gestures
+    are the natural ones, but the syllable-long wrist flicks are smoothed, so the energy / wrist-speed r drops
+    (0.60 -> 0.50 on the benchmark's corpus): the issue's r >= 0.5 sits at this ceiling."""
+    from evalsuite.motion import save_motion
+    from evalsuite.motion.ops import resample
+
+    for folder, fps in (("native", None), ("via20", 20.0)):
+        (tmp_path / folder).mkdir()
+        for seg in corpus.split("test"):
+            m = seg.load_motion()
+            save_motion(m if fps is None else resample(resample(m, fps), m.fps), tmp_path / folder / f"{seg.id}.bvh")
+    native, via20 = evaluate_condition(tmp_path / "native", corpus), evaluate_condition(tmp_path / "via20", corpus)
+    assert native["pose_mse"] == 0.0
+    assert via20["pose_mse"] < 0.1    # cm²; the mean pose's is about 36
+    assert via20["lexical_mean"] == pytest.approx(native["lexical_mean"], rel=0.02)
+    assert via20["energy_speed_r"] < native["energy_speed_r"] - 0.05
