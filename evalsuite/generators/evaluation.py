@@ -30,11 +30,11 @@ from evalsuite.metrics.coupling import (
     wrist_indices,
 )
 from evalsuite.motion import Motion
-from evalsuite.motion.io import list_motion_files, load_motion
+from evalsuite.motion.io import list_motion_files, load_motion, save_motion
 from evalsuite.motion.ops import resample
 from evalsuite.motion.presets import GENEA2020_UPPER
 
-__all__ = ["evaluate_condition", "POSITION_CLASSES", "segment_scores"]
+__all__ = ["evaluate_condition", "POSITION_CLASSES", "segment_scores", "natural_through_rate"]
 
 POSITION_CLASSES = ("up", "wide", "self", "point")
 
@@ -87,6 +87,17 @@ def evaluate_condition(folder: str | pathlib.Path, corpus: Corpus, split: str = 
     out["lexical_mean"] = float(np.nanmean(classes)) if np.isfinite(classes).any() else float("nan")
     out["segments"] = len(rows)
     return out
+
+
+def natural_through_rate(corpus: Corpus, folder: str | pathlib.Path, fps: float, split: str = "test") -> pathlib.Path:
+    """Write the split's natural motion resampled to ``fps`` and back to its own rate into ``folder`` (one BVH per
+    segment): what a perfect model working at ``fps`` would output, the reference for :func:`evaluate_condition`."""
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for seg in corpus.split(split):
+        nat = seg.load_motion()
+        save_motion(resample(resample(nat, fps), nat.fps), folder / f"{seg.id}.bvh")
+    return folder
 
 
 def swapped_audio(requests: Sequence[Any]) -> list[Any]:
