@@ -33,6 +33,7 @@ from evalsuite.corpus import load_corpus
 from evalsuite.corpus.synth.corpus import synthesize_corpus
 from evalsuite.generators import find_generator
 from evalsuite.generators.evaluation import evaluate_condition, natural_through_rate, swapped_audio
+from evalsuite.generators.pose_repr import MODEL_FPS
 from evalsuite.generators.registry import BUILTIN
 from evalsuite.generators.requests import requests_from_corpus
 from evalsuite.generators.runner import generate
@@ -76,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     generate(find_generator("natural"), reqs, out / "natural", progress=False)
     base = evaluate_condition(out / "mean_pose", corpus)
     natural = evaluate_condition(out / "natural", corpus)
-    ceiling = evaluate_condition(natural_through_rate(corpus, out / "natural_via_20fps", 20.0), corpus)
+    ceiling = evaluate_condition(natural_through_rate(corpus, out / "natural_via_20fps", MODEL_FPS), corpus)
     rows = [{"generator": "natural via 20 fps", "pose_err_vs_mean_pose": ceiling["pose_mse"] / base["pose_mse"],
              "energy_speed_r": ceiling.get("energy_speed_r"),
              "lexical_vs_natural": ceiling["lexical_mean"] / natural["lexical_mean"]}]

@@ -30,9 +30,10 @@ from evalsuite.motion.joint_rotations import rotation_joints, with_rotation_vect
 from evalsuite.motion.ops import resample
 from evalsuite.motion.presets import GENEA2020_UPPER
 
-__all__ = ["PoseRepresentation", "KINDS"]
+__all__ = ["PoseRepresentation", "KINDS", "MODEL_FPS"]
 
 KINDS = ("expmap", "rotmat", "positions")
+MODEL_FPS = 20.0   # the frame rate of all four seed papers' models
 
 
 @dataclass
@@ -44,7 +45,7 @@ class PoseRepresentation:
 
     @classmethod
     def from_motion(cls, motion: Motion, kind: str = "expmap", joints: list[str] | None = None,
-                    fps: float = 20.0) -> PoseRepresentation:
+                    fps: float = MODEL_FPS) -> PoseRepresentation:
         """A representation of the joints (default: the GENEA 2020 upper body present in the motion) of the
         motion's skeleton; its first frame is the template."""
         if kind not in KINDS:
