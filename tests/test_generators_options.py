@@ -28,6 +28,9 @@ def test_numbers_and_flags_are_parsed_as_the_cli_gives_them():
     ("gesture2vec", "codebook", True, "must be an integer"),
     ("aud2pose", "learning_rate", "nan", "finite number"),
     ("gesticulator", "film", "maybe", "must be true or false, got 'maybe'"),
+    ("aud2repr2pose", "ema", "1", r"ema must be in \[0, 1\)"),
+    ("gesticulator", "ema", "abc", "ema must be a number"),
+    ("gesticulator", "velocity_weight", "x", "must be a finite number"),
 ])
 def test_a_bad_value_names_the_option(name, option, value, expected):
     g = _configured(name, **{option: value})

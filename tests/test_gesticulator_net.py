@@ -71,3 +71,13 @@ def test_the_cosine_learning_rate_decays_from_the_rate_to_one_percent():
     assert {constant.learning_rate_at(e) for e in range(60)} == {1e-3}
     with pytest.raises(ValueError, match="lr_schedule"):
         replace(schedule, lr_schedule="step").learning_rate_at(1)
+
+
+def test_the_loss_is_pose_mse_plus_alpha_times_velocity_mse():
+    from evalsuite.generators.gesticulator.training import _loss, velocity_weight
+
+    pred = torch.zeros(1, 3, 1)
+    target = torch.tensor([[[0.0], [1.0], [3.0]]])  # pose MSE 10/3; velocities 1, 2: velocity MSE 5/2
+    assert velocity_weight == 0.6  # the paper's alpha, equation (2)
+    assert float(_loss(pred, target)) == pytest.approx(10 / 3 + 0.6 * 5 / 2)
+    assert float(_loss(pred, target, 0.0)) == pytest.approx(10 / 3)  # the "no velocity penalty" ablation

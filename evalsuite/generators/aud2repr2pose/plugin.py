@@ -37,6 +37,7 @@ from evalsuite.generators.reimpl import (
 )
 from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
 from evalsuite.generators.schedules import SCHEDULES
+from evalsuite.generators.weight_averaging import EMA_DEVIATION, ema_option
 
 __all__ = ["Aud2Pose", "Aud2Motion", "Aud2Repr2Pose"]
 
@@ -58,7 +59,9 @@ OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-fra
            "batch_size": "windows or chunks per batch (default 16 chunks / 2056 windows)",
            "learning_rate": "Adam (default 1e-3, the paper's)",
            "scale_floor": FLOOR_OPTION,
-           "threads": "torch threads (default 1)"}
+           "threads": "torch threads (default 1)",
+           "ema": "decay of an exponential moving average of the weights per optimiser step (default 0.99; 0: "
+                  "off, the paper's); the average is what is validated and kept"}
 DEVIATIONS = ("The speech network runs in the sequence-level form by default (one bidirectional GRU pass per "
               "100-frame chunk instead of one 61-frame window per output frame: ~60x less computation on a CPU); "
               "form=windowed is the paper's.",
@@ -66,7 +69,7 @@ DEVIATIONS = ("The speech network runs in the sequence-level form by default (on
               "(early stopping), where the paper trained a fixed number of epochs.",
               "Motion: joint rotations (exponential maps) of the GENEA 2020 upper body of the corpus's skeleton by "
               "default, or hip-centred joint positions; the paper used 64 joint positions + velocities of a "
-              "Japanese corpus.", FLOOR_DEVIATION)
+              "Japanese corpus.", FLOOR_DEVIATION, EMA_DEVIATION)
 
 
 class _Aud2(Generator):
@@ -89,7 +92,7 @@ class _Aud2(Generator):
                 "batch_size": self.int_option("batch_size", 2056 if windowed else 16),
                 "learning_rate": self.float_option("learning_rate", 1e-3), "threads": self.int_option("threads", 1),
                 "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR)),
-                "lr_schedule": schedule}
+                "lr_schedule": schedule, "ema": ema_option(self.option("ema", 0.99))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -112,7 +115,8 @@ class _Aud2(Generator):
                              batch_size=st["batch_size"], learning_rate=st["learning_rate"], seed=seed,
                              val_speech=vspeech, val_poses=[a.poses for a in va],
                              budget_seconds=budget_seconds(budget_minutes), patience=st["patience"],
-                             scale_floor=st["scale_floor"], lr_schedule=st["lr_schedule"], on_epoch=progress)
+                             scale_floor=st["scale_floor"], lr_schedule=st["lr_schedule"], ema=st["ema"],
+                             on_epoch=progress)
         rep.save(out_dir)
         sha = save_state(out_dir, "speech_net.pt", model.speech_net)
         if model.dae is not None:

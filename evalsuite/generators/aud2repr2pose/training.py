@@ -18,6 +18,7 @@ from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechN
 from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.scaling import floored_spread
 from evalsuite.generators.schedules import learning_rate_at
+from evalsuite.generators.weight_averaging import WeightAverage
 
 __all__ = ["MaxAbsScaler", "Standardiser", "TrainedSystem", "train_dae", "train_system", "generate",
            "SYSTEMS"]
@@ -124,7 +125,7 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
                  batch_size: int = 2056, learning_rate: float = 1e-3, chunk: int = 100, seed: int = 0,
                  val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
                  budget_seconds: float | None = None, patience: int | None = None, scale_floor: float = 0.0,
-                 lr_schedule: str = "constant",
+                 lr_schedule: str = "constant", ema: float = 0.0,
                  on_epoch: Callable[[dict], None] | None = None) -> TrainedSystem:
     """Train one of ``SYSTEMS`` on segments; deterministic for a seed on one machine. With validation data the
     weights of the best validation epoch are kept (:class:`~evalsuite.generators.early_stopping.BestWeights`;
@@ -171,7 +172,9 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
                 vy = [dae.encode(torch.from_numpy(y)).numpy() for y in vy]
         val = dataset([speech_norm(s) for s in val_speech], vy)
     history: list[dict] = []
-    best = BestWeights(net, patience)
+    averaged = WeightAverage(net, ema)  # with ema=0 its module is net itself
+    judged = averaged.module
+    best = BestWeights(judged, patience)
     for epoch in range(epochs):
         for group in opt.param_groups:
             group["lr"] = learning_rate_at(lr_schedule, learning_rate, epoch, epochs)
@@ -184,13 +187,14 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             opt.zero_grad()
             loss.backward()
             opt.step()
+            averaged.update(net)
             total += loss.item() * len(idx)
         record = {"stage": "speech", "epoch": epoch + 1, "train_loss": total / len(xt),
                   "seconds": time.perf_counter() - start}
         if val is not None:
-            net.eval()
+            judged.eval()
             with torch.no_grad():
-                record["val_loss"] = float(nn.functional.mse_loss(net(val[0]), val[1]))
+                record["val_loss"] = float(nn.functional.mse_loss(judged(val[0]), val[1]))
         history.append(record)
         stop = best.update(record)
         if on_epoch is not None:
@@ -201,6 +205,7 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             record["stopped"] = "time budget spent"
             break
     best.restore()
+    net = judged
     net.eval()
     return TrainedSystem(system, net, speech_norm, pose_norm, dae, history)
 

@@ -36,6 +36,7 @@ from evalsuite.generators.reimpl import (
 )
 from evalsuite.generators.scaling import scale_floor_option
 from evalsuite.generators.schedules import SCHEDULES
+from evalsuite.generators.weight_averaging import ema_option
 
 __all__ = ["Gesticulator"]
 
@@ -73,6 +74,10 @@ class Gesticulator(Generator):
                 "dropout": "dropout of the speech layers (default 0.5; the paper's 0.2)",
                 "weight_decay": "Adam weight decay (default 1e-3; the paper: none)",
                 "prev_pose_dropout": "dropout of the previous poses before FiLM (default 0.8, the paper's)",
+                "velocity_weight": "alpha of the paper's loss, MSE(pose) + alpha MSE(velocity) (default 0.6, the "
+                                   "paper's; 0 is its 'no velocity penalty' ablation)",
+                "ema": "decay of an exponential moving average of the weights per step (default 0: off); the "
+                       "average is what is validated and kept",
                 "scale_floor": "a pose dimension's standard deviation is taken as at least this fraction of the "
                                "widest dimension's (default 0, the paper's unit variance; 0.1 scales idle sway as "
                                "the other re-implementations do, which on the synthetic speaker raised the held-out "
@@ -109,7 +114,8 @@ class Gesticulator(Generator):
                 "past": self.int_option("past", 10), "future": self.int_option("future", 20),
                 "dropout": self.float_option("dropout", 0.5), "weight_decay": self.float_option("weight_decay", 1e-3),
                 "prev_pose_dropout": self.float_option("prev_pose_dropout", 0.8),
-                "scale_floor": scale_floor_option(self.option("scale_floor", 0.0))}
+                "scale_floor": scale_floor_option(self.option("scale_floor", 0.0)),
+                "velocity_weight": self.float_option("velocity_weight", 0.6), "ema": ema_option(self.option("ema", 0.0))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -137,7 +143,8 @@ class Gesticulator(Generator):
                                    seed=seed, val_speech=[a.speech for a in va],
                                    val_poses=[a.poses for a in va], budget_seconds=budget_seconds(budget_minutes),
                                    patience=st["patience"], weight_decay=st["weight_decay"],
-                                   scale_floor=st["scale_floor"], on_epoch=progress)
+                                   scale_floor=st["scale_floor"], velocity_weight=st["velocity_weight"],
+                                   ema=st["ema"], on_epoch=progress)
         rep.save(out_dir)
         sha = save_state(out_dir, "gesticulator.pt", model.net)
         np.savez(out_dir / "normalisers.npz", speech_mean=model.speech_norm.mean, speech_std=model.speech_norm.std,

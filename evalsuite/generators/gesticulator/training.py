@@ -25,6 +25,7 @@ from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
 from evalsuite.generators.scaling import floored_spread
 from evalsuite.generators.schedules import learning_rate_at
+from evalsuite.generators.weight_averaging import WeightAverage
 
 __all__ = ["TrainSchedule", "Normaliser", "TrainedGesticulator", "train_gesticulator", "generate_poses",
            "make_sequences", "velocity_weight", "PREDICTED_FRAMES"]
@@ -141,10 +142,10 @@ def _rollout(net: GesticulatorNet, x: torch.Tensor, y: torch.Tensor, autoregress
     return torch.stack(outputs, dim=1)
 
 
-def _loss(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+def _loss(pred: torch.Tensor, target: torch.Tensor, alpha: float = velocity_weight) -> torch.Tensor:
     mse = nn.functional.mse_loss(pred, target)
     vel = nn.functional.mse_loss(pred[:, 1:] - pred[:, :-1], target[:, 1:] - target[:, :-1])
-    return mse + velocity_weight * vel
+    return mse + alpha * vel
 
 
 def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], config: GesticulatorConfig,
@@ -152,6 +153,7 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
                        val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
                        budget_seconds: float | None = None, patience: int | None = None,
                        weight_decay: float = 0.0, scale_floor: float = 0.0,
+                       velocity_weight: float = velocity_weight, ema: float = 0.0,
                        on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
     """Train on segments of (speech (T, A+X), poses (T, D)); deterministic for a seed on one machine.
 
@@ -172,7 +174,8 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
     net = GesticulatorNet(config)
     opt = torch.optim.Adam(net.parameters(), lr=schedule.learning_rate, weight_decay=weight_decay)
     history: list[dict] = []
-    best = BestWeights(net, patience)
+    averaged = WeightAverage(net, ema)
+    best = BestWeights(averaged.module, patience)
     start = time.perf_counter()
     for epoch in range(schedule.epochs):
         autoregressive, period = schedule.stage(epoch)
@@ -185,20 +188,23 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
             idx = torch.from_numpy(order[i:i + schedule.batch_size])
             xb, yb = xt[idx], yt[idx]
             pred = _rollout(net, xb, yb, autoregressive and config.autoregressive, period)
-            loss = _loss(pred, yb[:, config.past:schedule.sequence - config.future])
+            loss = _loss(pred, yb[:, config.past:schedule.sequence - config.future], velocity_weight)
             opt.zero_grad()
             loss.backward()
             opt.step()
+            averaged.update(net)
             total += loss.item() * len(idx)
             n += len(idx)
         record = {"epoch": epoch + 1, "stage": "pretrain" if not autoregressive else
                   ("autoregressive" if period == 1 else f"teacher forcing 1/{period}"),
                   "train_loss": total / n, "seconds": time.perf_counter() - start}
         if val is not None:
-            net.eval()
+            judged = averaged.module
+            judged.eval()
             with torch.no_grad():
-                vpred = _rollout(net, val[0], val[1], config.autoregressive, 1)
-                record["val_loss"] = float(_loss(vpred, val[1][:, config.past:schedule.sequence - config.future]))
+                vpred = _rollout(judged, val[0], val[1], config.autoregressive, 1)
+                record["val_loss"] = float(_loss(vpred, val[1][:, config.past:schedule.sequence - config.future],
+                                                 velocity_weight))
         history.append(record)
         stop = best.update(record)
         if on_epoch is not None:
@@ -209,6 +215,7 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
             record["stopped"] = "time budget spent"
             break
     best.restore()
+    net = averaged.module
     net.eval()
     return TrainedGesticulator(net, speech_norm, pose_norm, history)
 
