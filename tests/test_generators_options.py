@@ -30,6 +30,7 @@ def test_numbers_and_flags_are_parsed_as_the_cli_gives_them():
     ("gesticulator", "film", "maybe", "must be true or false, got 'maybe'"),
     ("aud2repr2pose", "ema", "1", r"ema must be in \[0, 1\)"),
     ("gesticulator", "ema", "abc", "ema must be a number"),
+    ("ferstl-mogan", "scale_floor", "1.5", r"scale_floor must be in \[0, 1\)"),
     ("gesticulator", "velocity_weight", "x", "must be a finite number"),
 ])
 def test_a_bad_value_names_the_option(name, option, value, expected):

@@ -228,6 +228,16 @@ class Generator(abc.ABC):
                                  field=name)
         return number
 
+    def fraction_option(self, name: str, default: float | None = None) -> float:
+        """A number in [0, 1) (a floor, a decay); anything else is a GeneratorError naming the field."""
+        value = self.option(name, default)
+        number = _finite_number(value)
+        if number is None:
+            raise GeneratorError(f"{name} must be a number in [0, 1), got {value!r}", field=name)
+        if not 0.0 <= number < 1.0:
+            raise GeneratorError(f"{name} must be in [0, 1), got {number:g}", field=name)
+        return number
+
     def choice_option(self, name: str, default: str, choices: Sequence[str]) -> str:
         """One of ``choices`` (a plug-in's named variants: sizes, ablations, schedules); anything else is a
         GeneratorError naming the field and the choices."""

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["floored_spread", "scale_floor_option", "DEFAULT_FLOOR", "FLOOR_OPTION", "FLOOR_DEVIATION"]
+__all__ = ["floored_spread", "DEFAULT_FLOOR", "FLOOR_OPTION", "FLOOR_DEVIATION"]
 
 DEFAULT_FLOOR = 0.1
 FLOOR_OPTION = ("a pose dimension's scale is at least this fraction of the widest dimension's (default 0.1), so "
@@ -38,14 +38,3 @@ def floored_spread(spread: np.ndarray, floor: float) -> np.ndarray:
     return np.maximum(s, max(float(floor) * top, 1e-6))
 
 
-def scale_floor_option(value: object) -> float:
-    """A plug-in's ``scale_floor`` option as a float in [0, 1), or a GeneratorError naming the field."""
-    from evalsuite.generators.contract import GeneratorError
-
-    try:
-        floor = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise GeneratorError(f"scale_floor must be a number in [0, 1), got {value!r}", field="scale_floor") from None
-    if not 0.0 <= floor < 1.0:
-        raise GeneratorError(f"scale_floor must be in [0, 1), got {floor:g}", field="scale_floor")
-    return floor

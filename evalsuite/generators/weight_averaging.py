@@ -12,24 +12,11 @@ from typing import TYPE_CHECKING, Generic, TypeVar, cast
 if TYPE_CHECKING:
     from torch import nn
 
-__all__ = ["WeightAverage", "ema_option", "EMA_DEVIATION"]
+__all__ = ["WeightAverage", "EMA_DEVIATION"]
 
 EMA_DEVIATION = ("An exponential moving average of the weights (decay ema = 0.99 per step) is what is validated and "
                  "kept (the paper keeps the trained weights; ema=0 does): it lowered the held-out pose error of "
                  "all three systems in every training tried.")
-
-
-def ema_option(value: object) -> float:
-    """A plug-in's ``ema`` option as a decay in [0, 1), or a GeneratorError naming the field."""
-    from evalsuite.generators.contract import GeneratorError
-
-    try:
-        decay = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise GeneratorError(f"ema must be a number in [0, 1), got {value!r}", field="ema") from None
-    if not 0.0 <= decay < 1.0:
-        raise GeneratorError(f"ema must be in [0, 1) (0: off), got {decay:g}", field="ema")
-    return decay
 
 
 NetT = TypeVar("NetT", bound="nn.Module")

@@ -35,9 +35,9 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
 from evalsuite.generators.schedules import SCHEDULES
-from evalsuite.generators.weight_averaging import EMA_DEVIATION, ema_option
+from evalsuite.generators.weight_averaging import EMA_DEVIATION
 
 __all__ = ["Aud2Pose", "Aud2Motion", "Aud2Repr2Pose"]
 
@@ -91,8 +91,8 @@ class _Aud2(Generator):
                 "patience": self.int_option("patience", 25),
                 "batch_size": self.int_option("batch_size", 2056 if windowed else 16),
                 "learning_rate": self.float_option("learning_rate", 1e-3), "threads": self.int_option("threads", 1),
-                "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR)),
-                "lr_schedule": schedule, "ema": ema_option(self.option("ema", 0.99))}
+                "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR),
+                "lr_schedule": schedule, "ema": self.fraction_option("ema", 0.99)}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:

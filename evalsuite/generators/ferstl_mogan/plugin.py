@@ -38,7 +38,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
 
 __all__ = ["FerstlMogan", "ABLATIONS"]
 
@@ -116,7 +116,7 @@ class FerstlMogan(Generator):
                 "adversarial_learning_rate": self.float_option("adversarial_learning_rate", 5e-4),
                 "discriminator_learning_rate": self.float_option("discriminator_learning_rate", 1e-4),
                 "threads": self.int_option("threads", 1),
-                "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR))}
+                "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR)}
 
     # -- training ------------------------------------------------------------------------------------------
     def _arrays(self, segs: Sequence[Segment], rep: PoseRepresentation, use_corpus_labels: bool):

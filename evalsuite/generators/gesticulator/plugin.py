@@ -34,9 +34,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.scaling import scale_floor_option
 from evalsuite.generators.schedules import SCHEDULES
-from evalsuite.generators.weight_averaging import ema_option
 
 __all__ = ["Gesticulator"]
 
@@ -114,8 +112,8 @@ class Gesticulator(Generator):
                 "past": self.int_option("past", 10), "future": self.int_option("future", 20),
                 "dropout": self.float_option("dropout", 0.5), "weight_decay": self.float_option("weight_decay", 1e-3),
                 "prev_pose_dropout": self.float_option("prev_pose_dropout", 0.8),
-                "scale_floor": scale_floor_option(self.option("scale_floor", 0.0)),
-                "velocity_weight": self.float_option("velocity_weight", 0.6), "ema": ema_option(self.option("ema", 0.0))}
+                "scale_floor": self.fraction_option("scale_floor", 0.0),
+                "velocity_weight": self.float_option("velocity_weight", 0.6), "ema": self.fraction_option("ema", 0.0)}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:

@@ -41,7 +41,7 @@ from evalsuite.generators.reimpl import (
     weights_sha256,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION, scale_floor_option
+from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
 
 __all__ = ["Gesture2Vec", "code_usage", "SIZES"]
 
@@ -127,7 +127,7 @@ class Gesture2Vec(Generator):
               "reset_dead_codes": self.bool_option("reset_dead_codes", True),
               "aligned": self.bool_option("aligned", True),
               "threads": self.int_option("threads", 1),
-              "scale_floor": scale_floor_option(self.option("scale_floor", DEFAULT_FLOOR))}
+              "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR)}
         for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
             if st[name] < 1:
                 raise GeneratorError(f"{name} must be a positive integer, got {st[name]}", field=name)
