@@ -54,7 +54,7 @@ OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-fra
            "code_dim": "aud2repr2pose: size of the motion representation (default 40, as GENEA 2020 BA)",
            "epochs": "most epochs of the speech network (default 300)", "dae_epochs": "autoencoder epochs (default 20)",
            "lr_schedule": "constant (default, the paper's) or cosine (Adam's rate decays to 1 % by epoch 'epochs')",
-           "patience": "stop after this many epochs without a better validation loss (default 25); the best "
+           "patience": "stop after this many epochs without a better validation loss (default 50); the best "
                        "validation epoch's weights are kept",
            "batch_size": "windows or chunks per batch (default 16 chunks / 2056 windows)",
            "learning_rate": "Adam (default 1e-3, the paper's)",
@@ -88,7 +88,7 @@ class _Aud2(Generator):
         return {"form": form, "representation": rep, "features": feats,
                 "width": self.int_option("width", 64), "code_dim": self.int_option("code_dim", 40),
                 "epochs": self.int_option("epochs", 300), "dae_epochs": self.int_option("dae_epochs", 20),
-                "patience": self.int_option("patience", 25),
+                "patience": self.int_option("patience", 50),
                 "batch_size": self.int_option("batch_size", 2056 if windowed else 16),
                 "learning_rate": self.float_option("learning_rate", 1e-3), "threads": self.int_option("threads", 1),
                 "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR),
