@@ -2,10 +2,9 @@
 from __future__ import annotations
 
 import pytest
+import torch  # required by the test suite (.ci/run installs it), not skipped
 
-torch = pytest.importorskip("torch")
-
-from evalsuite.generators.weight_averaging import WeightAverage  # noqa: E402
+from evalsuite.generators.weight_averaging import WeightAverage
 
 
 def _net() -> torch.nn.Module:

@@ -28,7 +28,6 @@ class WeightAverage(Generic[NetT]):
     def __init__(self, net: NetT, decay: float = 0.0):
         if not 0.0 <= decay < 1.0:
             raise ValueError(f"the weight-average decay must be in [0, 1), got {decay}")
-        self.decay = decay
         self._averaged = None
         if decay > 0:
             from torch.optim.swa_utils import AveragedModel, get_ema_multi_avg_fn

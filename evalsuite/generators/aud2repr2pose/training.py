@@ -205,9 +205,8 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             record["stopped"] = "time budget spent"
             break
     best.restore()
-    net = judged
-    net.eval()
-    return TrainedSystem(system, net, speech_norm, pose_norm, dae, history)
+    judged.eval()
+    return TrainedSystem(system, judged, speech_norm, pose_norm, dae, history)
 
 
 @torch.no_grad()

@@ -199,10 +199,9 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
                   ("autoregressive" if period == 1 else f"teacher forcing 1/{period}"),
                   "train_loss": total / n, "seconds": time.perf_counter() - start}
         if val is not None:
-            judged = averaged.module
-            judged.eval()
+            averaged.module.eval()
             with torch.no_grad():
-                vpred = _rollout(judged, val[0], val[1], config.autoregressive, 1)
+                vpred = _rollout(averaged.module, val[0], val[1], config.autoregressive, 1)
                 record["val_loss"] = float(_loss(vpred, val[1][:, config.past:schedule.sequence - config.future],
                                                  velocity_weight))
         history.append(record)
