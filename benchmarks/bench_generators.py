@@ -15,18 +15,31 @@ and back to the corpus's rate: the best any 20-fps model can do. Its energy / wr
 natural motion's at the corpus's rate (0.50 against 0.60 on the seed-0 corpus), because the wrist's flick within
 each syllable lasts about four frames at 20 fps and the resampling's interpolation smooths it.
 
-Usage: python benchmarks/bench_generators.py [--minutes 30] [--budget 10] [--only NAME ...] [--out DIR]
-Prints one table (Markdown) and writes it to OUT/criteria.md and .csv.
+Issue 15's criteria follow for the systems of that issue that ran:
+
+* ``gesture2vec``: lexical contrast against half the natural motion's, codebook perplexity against 0.3 K, the
+  NSD of its latent space against a shuffled control, held-out FGD against ``mean_pose``'s;
+* ``ferstl-mogan``, beside its ablations (``--mogan-ablations``, default the MSE-only one the criteria compare
+  with): wrist-speed Hellinger distance to natural, ``l1div`` / ``div_k`` distance to natural, energy / wrist-speed
+  r, the difference of two samples per segment, the phase classifier's F1; and the paper's Figure 1-style
+  distribution plots of the full model, its ablations and natural motion (OUT/figures).
+
+Usage: python benchmarks/bench_generators.py [--minutes 30] [--seed 0] [--train-seed S] [--corpus DIR]
+       [--budget 9] [--only NAME ...] [--mogan-ablations mse_only,...] [--out DIR]
+Prints the tables (Markdown) and writes them to OUT/criteria.md / .csv and OUT/criteria_issue15.md / .json.
+Other processes on the machine slow every time down; the script prints the load average.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import pathlib
 import sys
 import tempfile
 import time
 
+import numpy as np
 import pandas as pd
 
 from evalsuite.corpus import load_corpus
@@ -45,6 +58,8 @@ SYSTEMS: dict[str, tuple[str, dict]] = {
     "aud2pose": ("aud2pose", {}), "aud2motion": ("aud2motion", {}), "aud2repr2pose": ("aud2repr2pose", {}),
     "gesture2vec": ("gesture2vec", {}), "ferstl-mogan": ("ferstl-mogan", {})}
 AUDIO_DRIVEN = {"gesticulator", "aud2pose", "aud2motion", "aud2repr2pose", "ferstl-mogan"}
+MOGAN_ABLATIONS = ("no_phase", "no_realism", "no_minibatch", "no_displacement", "mse_only")
+HOLDS = {">=": lambda v, b: v >= b, ">": lambda v, b: v > b, "<": lambda v, b: v < b}
 
 
 def markdown(table: pd.DataFrame) -> str:
@@ -59,11 +74,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--minutes", type=float, default=30.0)
     ap.add_argument("--budget", type=float, default=9.0, help="training budget per generator, minutes")
     ap.add_argument("--only", nargs="*", default=None)
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=int, default=0, help="the synthetic corpus's seed")
+    ap.add_argument("--train-seed", type=int, default=None, help="the trainings' seed (default: --seed)")
+    ap.add_argument("--corpus", type=pathlib.Path, default=None, help="an existing corpus instead of a new one")
+    ap.add_argument("--mogan-ablations", default="mse_only",
+                    help=f"ferstl-mogan ablations trained beside it, comma-separated: {', '.join(MOGAN_ABLATIONS)}")
     ap.add_argument("--out", type=pathlib.Path, default=None)
     args = ap.parse_args(argv)
+    ablations = [a for a in args.mogan_ablations.split(",") if a]
+    unknown = sorted(set(ablations) - set(MOGAN_ABLATIONS))
+    if unknown:
+        ap.error(f"--mogan-ablations: unknown {unknown}; expected some of {', '.join(MOGAN_ABLATIONS)}")
+    train_seed = args.seed if args.train_seed is None else args.train_seed
     out = args.out or pathlib.Path(tempfile.mkdtemp(prefix="bench-generators-"))
-    corpus_dir = out / "corpus"
+    corpus_dir = args.corpus or out / "corpus"
+    print(f"load average at start: {os.getloadavg()}", flush=True)
     t0 = time.perf_counter()
     if not (corpus_dir / "corpus.json").is_file():
         synthesize_corpus(corpus_dir, args.minutes, seed=args.seed, progress=False)
@@ -82,14 +107,16 @@ def main(argv: list[str] | None = None) -> int:
              "energy_speed_r": ceiling.get("energy_speed_r"),
              "lexical_vs_natural": ceiling["lexical_mean"] / natural["lexical_mean"]}]
     print(json.dumps({k: (round(v, 3) if isinstance(v, float) else v) for k, v in rows[0].items()}), flush=True)
+    trained = {}
     for name, (generator, config) in SYSTEMS.items():
         if generator not in BUILTIN or (args.only and name not in args.only):
             continue
         entry = find_generator(generator)
         t1 = time.perf_counter()
-        result = train(entry, corpus, out / "models" / name, seed=args.seed, budget_minutes=args.budget,
+        result = train(entry, corpus, out / "models" / name, seed=train_seed, budget_minutes=args.budget,
                        config=config, progress=False)
         train_s = time.perf_counter() - t1
+        trained[name] = (result, train_s)
         t2 = time.perf_counter()
         generate(entry, reqs, out / name, model_dir=out / "models" / name, progress=False, check_determinism=False)
         gen_s = time.perf_counter() - t2
@@ -117,7 +144,101 @@ def main(argv: list[str] | None = None) -> int:
     (out / "criteria.md").write_text(markdown(table) + "\n")
     print(f"mean_pose pose error {base['pose_mse']:.2f} units^2; natural lexical mean {natural['lexical_mean']:.2f}; "
           f"natural energy / wrist-speed r {natural.get('energy_speed_r', float('nan')):.3f}; outputs in {out}")
+    issue15 = []
+    if "gesture2vec" in trained:
+        issue15 += gesture2vec_rows(corpus, out, trained["gesture2vec"][0], natural["lexical_mean"])
+    if "ferstl-mogan" in trained:
+        issue15 += ferstl_mogan_rows(corpus, out, trained["ferstl-mogan"], ablations, train_seed, args.budget)
+    if issue15:
+        lines = ["| system | criterion | measured | bound | holds |", "|---|---|---|---|---|"]
+        for system, what, value, op, bound in issue15:
+            holds = "reported" if op == "report" else ("yes" if HOLDS[op](value, bound) else "**no**")
+            lines.append(f"| {system} | {what} | {value:.4g} | {bound:.4g} | {holds} |")
+        print("\n".join(lines))
+        (out / "criteria_issue15.md").write_text("\n".join(lines) + "\n")
+        (out / "criteria_issue15.json").write_text(json.dumps(issue15, indent=1))
+    print(f"load average at the end: {os.getloadavg()}")
     return 0
+
+
+def gesture2vec_rows(corpus, out: pathlib.Path, result, natural_lexical: float) -> list[tuple]:
+    """Issue 15's criteria for the trained ``gesture2vec`` in OUT/models/gesture2vec (test split generated to
+    OUT/gesture2vec, ``mean_pose`` to OUT/mean_pose)."""
+    from evalsuite.generators import criteria as C
+    from evalsuite.generators.gesture2vec.plugin import Gesture2Vec, code_usage
+    from evalsuite.generators.gesture2vec.training import latent_windows
+
+    model = Gesture2Vec()
+    model.load({}, out / "models" / "gesture2vec")
+    nsd = C.latent_nsd([latent_windows(model.model, model.rep.encode(s.load_motion())) for s in corpus.split("test")])
+    fgd = C.fgd_against_natural(corpus, {k: C.generated_motions(out / k, corpus) for k in ("gesture2vec", "mean_pose")})
+    lexical = evaluate_condition(out / "gesture2vec", corpus)["lexical_mean"]
+    k = result.meta["codebook"]
+    usage = code_usage(out / "gesture2vec", out / "models" / "gesture2vec")
+    print(f"gesture2vec: {result.meta['codes_used']} of {k} codes used; usage {usage}", flush=True)
+    return [("gesture2vec", "lexical_mean >= 0.5 x natural", lexical, ">=", 0.5 * natural_lexical),
+            ("gesture2vec", "code perplexity > 0.3 K", result.meta["code_perplexity"], ">", 0.3 * k),
+            ("gesture2vec", "latent NSD < shuffled control", nsd["nsd"], "<", nsd["nsd_shuffled"]),
+            ("gesture2vec", "FGD < mean_pose's", fgd["gesture2vec"], "<", fgd["mean_pose"])]
+
+
+def ferstl_mogan_rows(corpus, out: pathlib.Path, full: tuple, ablations: list[str], seed: int,
+                      budget: float) -> list[tuple]:
+    """Issue 15's criteria for ``ferstl-mogan`` (trained in OUT/models/ferstl-mogan) against its ablations,
+    each trained here with the same seed and budget; two samples per test segment; Figure 1-style plots."""
+    from evalsuite.generators import criteria as C
+    from evalsuite.metrics.engine import score_folders
+    from evalsuite.metrics.figures import write_figures
+    from evalsuite.motion.presets import GENEA2020_UPPER
+
+    entry = find_generator("ferstl-mogan")
+    reqs = requests_from_corpus(corpus, "test", MODEL_FPS)
+    natural = C.natural_motions(corpus, "test", MODEL_FPS)
+    nat_div = C.diversity(natural)
+    measured = {}
+    for ab in ["none", *ablations]:
+        name = "ferstl-mogan" if ab == "none" else f"ferstl-mogan_{ab}"
+        if ab == "none":
+            result, train_s = full
+        else:
+            t1 = time.perf_counter()
+            result = train(entry, corpus, out / "models" / name, seed=seed, budget_minutes=budget,
+                           config={"ablation": ab}, progress=False)
+            train_s = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        generate(entry, reqs, out / "samples" / name, model_dir=out / "models" / name, samples=2, progress=False,
+                 check_determinism=False)
+        speed = 2 * sum(r.duration for r in reqs) / (time.perf_counter() - t2)
+        generate(entry, reqs, out / "figure_input" / name, model_dir=out / "models" / name, progress=False,
+                 check_determinism=False)
+        g0 = C.generated_motions(out / "samples" / name, corpus, sample=0)
+        g1 = C.generated_motions(out / "samples" / name, corpus, sample=1)
+        measured[ab] = {"hellinger": C.wrist_speed_hellinger(g0, natural), **C.diversity(g0),
+                        "energy_speed_r": evaluate_condition(out / "samples" / name, corpus)["energy_speed_r"],
+                        "sample_diff_cm": float(np.mean([np.abs(g0[s].positions() - g1[s].positions()).mean()
+                                                         for s in g0])),
+                        "f1": result.meta["phase_classifier_f1"], "train_s": round(train_s),
+                        "speed_x_realtime": round(speed)}
+        print(f"{name}: {json.dumps({k: round(v, 4) for k, v in measured[ab].items()})}", flush=True)
+    print(f"natural (test split, {MODEL_FPS:g} fps): {json.dumps({k: round(v, 4) for k, v in nat_div.items()})}")
+    full_m = measured["none"]
+    rows = [("ferstl-mogan", "phase classifier F1 (reported)", full_m["f1"], "report", float("nan")),
+            ("ferstl-mogan", "energy/wrist-speed r >= 0.3", full_m["energy_speed_r"], ">=", 0.3),
+            ("ferstl-mogan", "k samples differ (mean cm)", full_m["sample_diff_cm"], ">", 0.01)]
+    if "mse_only" in measured:
+        mse = measured["mse_only"]
+        rows.append(("ferstl-mogan", "wrist-speed Hellinger < mse_only's", full_m["hellinger"], "<", mse["hellinger"]))
+        rows += [("ferstl-mogan", f"|{key} - natural| < mse_only's", abs(full_m[key] - nat_div[key]), "<",
+                  abs(mse[key] - nat_div[key])) for key in ("l1div", "div_k")]
+    (out / "ferstl_mogan.json").write_text(json.dumps({"natural": nat_div, **measured}, indent=1))
+    generate(find_generator("natural"), reqs, out / "figure_input" / "natural", progress=False)
+    conditions = [str(out / "figure_input" / ("ferstl-mogan" if ab == "none" else f"ferstl-mogan_{ab}"))
+                  for ab in measured]
+    scored = score_folders(out / "figure_input" / "natural", conditions, joints=",".join(GENEA2020_UPPER),
+                           metrics="kinematics,histograms", progress=False)
+    paths = write_figures(scored, out / "figures")
+    print(f"Figure 1-style plots: {', '.join(p.name for p in paths)} in {out / 'figures'}")
+    return rows
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
 The corpus is small (about 6 minutes: ~14 training, 2 validation, 2 test segments) so that CI can train on it;
 the learning criteria are measured on its test split with budgets and epochs far below the benchmark's
-(benchmarks/bench_generators_g2v_mogan.py trains on 30 minutes with the defaults).
+(benchmarks/bench_generators.py trains on 30 minutes with the defaults).
 """
 from __future__ import annotations
 

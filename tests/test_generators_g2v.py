@@ -4,7 +4,7 @@ CI budget: most tests train on the ~6-minute corpus of ``g2v_mogan_helpers`` wit
 (the criterion is relative: perplexity above 0.3 K) and compressed epochs (about a minute on 2 cores). The
 translation model needs more data than that to learn the keywords, so the four learning criteria together are
 tested on a 15-minute corpus with the defaults (K = 300; about 2 minutes); the 30-minute benchmark
-(benchmarks/bench_generators_g2v_mogan.py) uses the defaults too.
+(benchmarks/bench_generators.py) uses the defaults too.
 """
 from __future__ import annotations
 
