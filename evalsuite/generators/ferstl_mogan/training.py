@@ -170,6 +170,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     for p in clf.parameters():
         p.requires_grad_(False)
     f1 = float("nan")
+    vX = vY = None
     if val is not None:
         vx, _ = _sequences([((s - smean) / sstd).astype(np.float32) for s in val[0]], config.sequence)
         vy, _ = _sequences([((p - pmean) / pstd).astype(np.float32) for p in val[1]], config.sequence)
@@ -178,6 +179,17 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
             pred = clf(_classifier_input(torch.from_numpy(vy), torch.from_numpy(vx)[..., -1], arm)).argmax(-1)
         f1 = weighted_f1(vl.reshape(-1), pred.numpy().reshape(-1), config.n_phases)
         log({"stage": "phase classifier", "val_weighted_f1": f1})
+        vX, vY = torch.from_numpy(vx), torch.from_numpy(vy)
+
+    def val_mse(g: Generator) -> dict:
+        """The generator's MSE on the held-out sequences (noise channels at zero, so that measuring draws no
+        random numbers and leaves training as it would be without it)."""
+        if vX is None:
+            return {}
+        g.eval()
+        with torch.no_grad():
+            out = g(vX, torch.zeros(len(vX), config.sequence, config.noise_dim))
+        return {"val_mse": float(nn.functional.mse_loss(out, vY))}
 
     def noise(b: int, t: int) -> torch.Tensor:
         return torch.randn(b, t, config.noise_dim)
@@ -198,7 +210,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
         cut = late(1, "generator MSE pre-training")
         if (epoch + 1) % every == 0 or cut:
             snapshots.append(copy.deepcopy(gen.state_dict()))
-        log({"stage": "generator MSE pre-training", "epoch": epoch + 1, "train_loss": loss.item()})
+        log({"stage": "generator MSE pre-training", "epoch": epoch + 1, "train_loss": loss.item(), **val_mse(gen)})
         if cut:
             break
     if "mse_only" in stages.discriminators or not stages.discriminators:
