@@ -27,7 +27,7 @@ Issue 15's criteria follow for the systems of that issue that ran:
 Usage: python benchmarks/bench_generators.py [--minutes 30] [--seed 0] [--train-seed S] [--corpus DIR]
        [--budget 9] [--only NAME ...] [--mogan-ablations mse_only,...] [--out DIR]
 Prints the tables (Markdown) and writes them to OUT/criteria.md / .csv and OUT/criteria_issue15.md / .json.
-Other processes on the machine slow every time down; the script prints the load average.
+Other processes on the machine slow every timing down; the script prints the load average.
 """
 from __future__ import annotations
 
