@@ -184,7 +184,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     def val_mse(g: Generator) -> dict:
         """The generator's MSE on the held-out sequences (noise channels at zero, so that measuring draws no
         random numbers and leaves training as it would be without it)."""
-        if vX is None:
+        if vX is None or vY is None:
             return {}
         g.eval()
         with torch.no_grad():
