@@ -233,9 +233,10 @@ class Generator(abc.ABC):
         value = self.option(name, default)
         number = _finite_number(value)
         if number is None:
-            raise GeneratorError(f"{name} must be a number in [0, 1), got {value!r}", field=name)
+            raise GeneratorError(f"{self.spec.name}: option {name} must be a number in [0, 1), got {value!r}",
+                                 field=name)
         if not 0.0 <= number < 1.0:
-            raise GeneratorError(f"{name} must be in [0, 1), got {number:g}", field=name)
+            raise GeneratorError(f"{self.spec.name}: option {name} must be in [0, 1), got {number:g}", field=name)
         return number
 
     def choice_option(self, name: str, default: str, choices: Sequence[str]) -> str:

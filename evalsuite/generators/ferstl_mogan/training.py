@@ -170,26 +170,26 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     for p in clf.parameters():
         p.requires_grad_(False)
     f1 = float("nan")
-    vX = vY = None
+    held: tuple[torch.Tensor, torch.Tensor] | None = None   # held-out (speech, positions) sequences
     if val is not None:
         vx, _ = _sequences([((s - smean) / sstd).astype(np.float32) for s in val[0]], config.sequence)
         vy, _ = _sequences([((p - pmean) / pstd).astype(np.float32) for p in val[1]], config.sequence)
         vl, _ = _sequences([np.asarray(p, np.int64) for p in val[2]], config.sequence)
+        held = torch.from_numpy(vx), torch.from_numpy(vy)
         with torch.no_grad():
-            pred = clf(_classifier_input(torch.from_numpy(vy), torch.from_numpy(vx)[..., -1], arm)).argmax(-1)
+            pred = clf(_classifier_input(held[1], held[0][..., -1], arm)).argmax(-1)
         f1 = weighted_f1(vl.reshape(-1), pred.numpy().reshape(-1), config.n_phases)
         log({"stage": "phase classifier", "val_weighted_f1": f1})
-        vX, vY = torch.from_numpy(vx), torch.from_numpy(vy)
 
     def val_mse(g: Generator) -> dict:
         """The generator's MSE on the held-out sequences (noise channels at zero, so that measuring draws no
         random numbers and leaves training as it would be without it)."""
-        if vX is None or vY is None:
+        if held is None:
             return {}
         g.eval()
         with torch.no_grad():
-            out = g(vX, torch.zeros(len(vX), config.sequence, config.noise_dim))
-        return {"val_mse": float(nn.functional.mse_loss(out, vY))}
+            out = g(held[0], torch.zeros(len(held[0]), config.sequence, config.noise_dim))
+        return {"val_mse": float(nn.functional.mse_loss(out, held[1]))}
 
     def noise(b: int, t: int) -> torch.Tensor:
         return torch.randn(b, t, config.noise_dim)
