@@ -12,7 +12,10 @@ Quirks of the original that this module reproduces (facts from the golden README
 - its decoder leaves dropout on at inference (keep probability 0.8, unseeded). Here the default is the
   deterministic reference (keep probability 1.0); ``keep_prob < 1`` with a ``seed`` draws one seeded sample.
 
-Arrays are float32 through the networks, as in the original, and float64 from the un-normalisation on.
+Arrays are float32 through the networks, as in the original, and float64 from the un-normalisation on. The
+speech encoder's tanh and batch-norm reciprocal square roots are TensorFlow's CPU approximations
+(:mod:`~evalsuite.generators.aud2repr2pose_demo.tf_arithmetic`): with them the GRU states equal the golden run's
+bit for bit on a CPU of its family. The decoder's tanh stays numpy's (TensorFlow fused it into a oneDNN kernel).
 """
 from __future__ import annotations
 
@@ -25,6 +28,7 @@ from scipy.signal import savgol_filter
 
 from evalsuite.errors import InputError
 from evalsuite.generators.aud2repr2pose_demo.tf1_checkpoint import read_tf1_checkpoint
+from evalsuite.generators.aud2repr2pose_demo.tf_arithmetic import eigen_tanh, tf_rsqrt
 
 __all__ = ["DemoModelError", "SpeechEncoder", "MotionDecoder", "Aud2Repr2PoseDemo", "POINT_NAMES", "POINT_PARENTS",
            "hard_sigmoid_keras2"]
@@ -77,11 +81,10 @@ def _distinct_frames(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _batch_norm(x: np.ndarray, p: dict[str, np.ndarray], eps: float) -> np.ndarray:
     """Keras inference-mode batch norm in TensorFlow's order, x * inv + (beta - mean * inv) with
     inv = rsqrt(var + eps) * gamma (``tf.nn.batch_normalization``), not (x - mean) * inv + beta: the same
-    formula, but float32 rounds the two differently. rsqrt is taken correctly rounded. Measured on the demo's
-    golden GRU states, this order brings the codes from 8.5e-7 to 2.7e-7 of Keras's."""
+    formula, but float32 rounds the two differently; rsqrt as TensorFlow's CPU kernel computes it
+    (:func:`~evalsuite.generators.aud2repr2pose_demo.tf_arithmetic.tf_rsqrt`)."""
     f32 = np.float32
-    rsqrt = (1.0 / np.sqrt((p["moving_variance"] + f32(eps)).astype(f32).astype(np.float64))).astype(f32)
-    inv = (rsqrt * p["gamma"]).astype(f32)
+    inv = (tf_rsqrt((p["moving_variance"] + f32(eps)).astype(f32)) * p["gamma"]).astype(f32)
     return (x * inv + (p["beta"] - (p["moving_mean"] * inv).astype(f32)).astype(f32)).astype(f32)
 
 
@@ -166,7 +169,7 @@ class SpeechEncoder:
         for t in range(x.shape[1]):
             z = hard_sigmoid_keras2(xz[:, t] + state @ uz)
             r = hard_sigmoid_keras2(xr[:, t] + state @ ur)
-            candidate = np.tanh(xh[:, t] + (r * state) @ uh)
+            candidate = eigen_tanh(xh[:, t] + (r * state) @ uh)
             state = (z * state + (1 - z) * candidate).astype(np.float32)
         return state
 
