@@ -61,12 +61,16 @@ OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-fra
            "scale_floor": FLOOR_OPTION,
            "threads": "torch threads (default 1)",
            "ema": "decay of an exponential moving average of the weights per optimiser step (default 0.99; 0: "
-                  "off, the paper's); the average is what is validated and kept"}
+                  "off, the paper's); the average is what is validated and kept",
+           "validate_on": "poses (default: MSE of the normalised poses over whole validation segments, the "
+                          "representation decoded) or targets (the training loss on validation chunks: the "
+                          "representation for aud2repr2pose)"}
 DEVIATIONS = ("The speech network runs in the sequence-level form by default (one bidirectional GRU pass per "
               "100-frame chunk instead of one 61-frame window per output frame: ~60x less computation on a CPU); "
               "form=windowed is the paper's.",
               "Layers are 64 units wide by default (paper: 256); the best validation epoch's weights are kept "
-              "(early stopping), where the paper trained a fixed number of epochs.",
+              "(early stopping), where the paper trained a fixed number of epochs; validation is the pose error "
+              "over whole held-out segments (validate_on=poses), the representation decoded for Aud2Repr2Pose.",
               "Motion: joint rotations (exponential maps) of the GENEA 2020 upper body of the corpus's skeleton by "
               "default, or hip-centred joint positions; the paper used 64 joint positions + velocities of a "
               "Japanese corpus.", FLOOR_DEVIATION, EMA_DEVIATION)
@@ -92,7 +96,8 @@ class _Aud2(Generator):
                 "batch_size": self.int_option("batch_size", 2056 if windowed else 16),
                 "learning_rate": self.float_option("learning_rate", 1e-3), "threads": self.int_option("threads", 1),
                 "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR),
-                "lr_schedule": schedule, "ema": self.fraction_option("ema", 0.99)}
+                "lr_schedule": schedule, "ema": self.fraction_option("ema", 0.99),
+                "validate_on": self.choice_option("validate_on", "poses", ("poses", "targets"))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -116,6 +121,7 @@ class _Aud2(Generator):
                              val_speech=vspeech, val_poses=[a.poses for a in va],
                              budget_seconds=budget_seconds(budget_minutes), patience=st["patience"],
                              scale_floor=st["scale_floor"], lr_schedule=st["lr_schedule"], ema=st["ema"],
+                             validate_on=st["validate_on"],
                              on_epoch=progress)
         rep.save(out_dir)
         sha = save_state(out_dir, "speech_net.pt", model.speech_net)

@@ -125,13 +125,17 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
                  batch_size: int = 2056, learning_rate: float = 1e-3, chunk: int = 100, seed: int = 0,
                  val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
                  budget_seconds: float | None = None, patience: int | None = None, scale_floor: float = 0.0,
-                 lr_schedule: str = "constant", ema: float = 0.0,
+                 lr_schedule: str = "constant", ema: float = 0.0, validate_on: str = "targets",
                  on_epoch: Callable[[dict], None] | None = None) -> TrainedSystem:
     """Train one of ``SYSTEMS`` on segments; deterministic for a seed on one machine. With validation data the
     weights of the best validation epoch are kept (:class:`~evalsuite.generators.early_stopping.BestWeights`;
-    ``patience``: stop after that many epochs without improvement)."""
+    ``patience``: stop after that many epochs without improvement). ``validate_on``: ``"targets"`` (the
+    training loss on the validation chunks: the representation for Aud2Repr2Pose) or ``"poses"`` (MSE of the
+    normalised poses over whole validation segments, the representation decoded)."""
     if system not in SYSTEMS:
         raise ValueError(f"unknown system {system!r}; expected one of {', '.join(SYSTEMS)}")
+    if validate_on not in ("targets", "poses"):
+        raise ValueError(f"validate_on must be 'targets' or 'poses', got {validate_on!r}")
     uses_repr, overrides = SYSTEMS[system]
     start = time.perf_counter()
     speech_norm, pose_norm = Standardiser.fit(speech), MaxAbsScaler.fit(poses, scale_floor)
@@ -165,7 +169,11 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
 
     xt, yt = dataset(xs, ys)
     val = None
-    if len(val_speech):
+    whole: list[tuple[torch.Tensor, torch.Tensor]] = []   # (speech, normalised poses) per validation segment
+    if len(val_speech) and validate_on == "poses":
+        whole = [(torch.from_numpy(speech_norm(s)), torch.from_numpy(pose_norm(p)))
+                 for s, p in zip(val_speech, val_poses)]
+    elif len(val_speech):
         vy = [pose_norm(p) for p in val_poses]
         if dae is not None:
             with torch.no_grad():
@@ -195,6 +203,11 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             judged.eval()
             with torch.no_grad():
                 record["val_loss"] = float(nn.functional.mse_loss(judged(val[0]), val[1]))
+        elif whole:
+            judged.eval()
+            with torch.no_grad():
+                err = [_decoded(judged, dae, x) - y for x, y in whole]
+            record["val_loss"] = float(sum(float((e ** 2).sum()) for e in err) / sum(e.numel() for e in err))
         history.append(record)
         stop = best.update(record)
         if on_epoch is not None:
@@ -207,6 +220,17 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
     best.restore()
     judged.eval()
     return TrainedSystem(system, judged, speech_norm, pose_norm, dae, history)
+
+
+def _decoded(net: SpeechNet, dae: MotionDAE | None, x: torch.Tensor) -> torch.Tensor:
+    """(T, F) normalised speech -> (T, D) normalised poses (sequence form: one pass over the segment)."""
+    c = net.config
+    if c.form == "windowed":
+        out = net(torch.from_numpy(np.ascontiguousarray(_windows(x.numpy(), c.context))))
+    else:
+        out = net(x[None])[0]
+    out = out[:, :c.output_dim]
+    return dae.decode(out) if dae is not None else out
 
 
 @torch.no_grad()

@@ -1,0 +1,46 @@
+"""What the aud2* trainers validate on: the kept weights are the best by the validation loss they log, and with
+``validate_on="poses"`` that loss is the pose error over whole held-out segments (the representation decoded)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from evalsuite.generators.aud2repr2pose.training import generate, train_system  # noqa: E402
+
+
+def _segments(rng: np.random.Generator, lengths: list[int]) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    speech = [rng.normal(size=(n, 26)).astype(np.float32) for n in lengths]
+    mix = rng.normal(size=(26, 12))
+    poses = [np.cumsum(s @ mix, axis=0) * 0.01 + rng.normal(size=(len(s), 12)) * 0.1 for s in speech]
+    return speech, poses
+
+
+@pytest.mark.parametrize("system", ["aud2repr2pose", "aud2motion"])
+def test_validation_on_poses_scores_whole_segments_and_keeps_the_best(system):
+    rng = np.random.default_rng(0)
+    speech, poses = _segments(rng, [230, 260, 240])
+    val_speech, val_poses = _segments(rng, [170, 135])   # 135: not a whole number of 100-frame chunks
+    torch.set_num_threads(1)
+    model = train_system(system, speech, poses, epochs=4, dae_epochs=2, code_dim=8, batch_size=4, seed=0,
+                         val_speech=val_speech, val_poses=val_poses, validate_on="poses",
+                         config={"width": 16})
+    losses = [r["val_loss"] for r in model.history if "val_loss" in r]
+    assert len(losses) == 4
+    err = [model.pose_norm(generate(model, s)) - model.pose_norm(p) for s, p in zip(val_speech, val_poses)]
+    kept = sum(float((e ** 2).sum()) for e in err) / sum(e.size for e in err)
+    assert kept == pytest.approx(min(losses), rel=1e-4)
+
+
+def test_validate_on_must_be_targets_or_poses():
+    from evalsuite.generators import GeneratorError, find_generator
+    from evalsuite.generators.registry import generator_class
+
+    g = generator_class(find_generator("aud2motion").target)()
+    g.configure({"validate_on": "codes"})
+    with pytest.raises(GeneratorError, match="validate_on") as err:
+        g._settings()
+    assert err.value.field == "validate_on"
+    with pytest.raises(ValueError, match="validate_on must be 'targets' or 'poses'"):
+        train_system("aud2pose", [np.zeros((120, 26), np.float32)], [np.zeros((120, 3))], validate_on="codes")
