@@ -169,10 +169,9 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
 
     xt, yt = dataset(xs, ys)
     val = None
-    whole: list[tuple[torch.Tensor, torch.Tensor]] = []   # (speech, normalised poses) per validation segment
+    whole: list[tuple[np.ndarray, torch.Tensor]] = []   # (normalised speech, poses) per validation segment
     if len(val_speech) and validate_on == "poses":
-        whole = [(torch.from_numpy(speech_norm(s)), torch.from_numpy(pose_norm(p)))
-                 for s, p in zip(val_speech, val_poses)]
+        whole = [(speech_norm(s), torch.from_numpy(pose_norm(p))) for s, p in zip(val_speech, val_poses)]
     elif len(val_speech):
         vy = [pose_norm(p) for p in val_poses]
         if dae is not None:
@@ -222,23 +221,10 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
     return TrainedSystem(system, judged, speech_norm, pose_norm, dae, history)
 
 
-def _decoded(net: SpeechNet, dae: MotionDAE | None, x: torch.Tensor) -> torch.Tensor:
-    """(T, F) normalised speech -> (T, D) normalised poses (sequence form: one pass over the segment)."""
+def _decoded(net: SpeechNet, dae: MotionDAE | None, x: np.ndarray, batch: int = 4096) -> torch.Tensor:
+    """(T, F) normalised speech -> (T, D) normalised poses: one pass over the segment (sequence form) or its
+    windows in batches (windowed form), the representation decoded when there is an autoencoder."""
     c = net.config
-    if c.form == "windowed":
-        out = net(torch.from_numpy(np.ascontiguousarray(_windows(x.numpy(), c.context))))
-    else:
-        out = net(x[None])[0]
-    out = out[:, :c.output_dim]
-    return dae.decode(out) if dae is not None else out
-
-
-@torch.no_grad()
-def generate(model: TrainedSystem, speech: np.ndarray, batch: int = 4096) -> np.ndarray:
-    """(T, F) speech features -> (T, D) poses in the training data's units."""
-    net, c = model.speech_net, model.speech_net.config
-    net.eval()
-    x = model.speech_norm(speech)
     if c.form == "windowed":
         w = _windows(x, c.context)
         out = torch.cat([net(torch.from_numpy(np.ascontiguousarray(w[i:i + batch])))
@@ -246,8 +232,14 @@ def generate(model: TrainedSystem, speech: np.ndarray, batch: int = 4096) -> np.
     else:
         out = net(torch.from_numpy(x)[None])[0]
     out = out[:, :c.output_dim]
-    if model.dae is not None:
-        out = model.dae.decode(out)
+    return dae.decode(out) if dae is not None else out
+
+
+@torch.no_grad()
+def generate(model: TrainedSystem, speech: np.ndarray, batch: int = 4096) -> np.ndarray:
+    """(T, F) speech features -> (T, D) poses in the training data's units."""
+    model.speech_net.eval()
+    out = _decoded(model.speech_net, model.dae, model.speech_norm(speech), batch)
     return model.pose_norm.inverse(out.numpy())
 
 
