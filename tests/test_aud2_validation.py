@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import torch
 
-torch = pytest.importorskip("torch")
-
-from evalsuite.generators.aud2repr2pose.training import generate, train_system  # noqa: E402
+from evalsuite.generators.aud2repr2pose.training import generate, train_system
 
 
 def _segments(rng: np.random.Generator, lengths: list[int]) -> tuple[list[np.ndarray], list[np.ndarray]]:

@@ -182,6 +182,16 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
     averaged = WeightAverage(net, ema)  # with ema=0 its module is net itself
     judged = averaged.module
     best = BestWeights(judged, patience)
+
+    @torch.no_grad()
+    def validation_loss() -> float:
+        """What picks the kept epoch (``validate_on``): the training loss on the validation chunks, or the MSE of
+        the normalised poses over whole validation segments."""
+        judged.eval()
+        if val is not None:
+            return float(nn.functional.mse_loss(judged(val[0]), val[1]))
+        err = [_decoded(judged, dae, x) - y for x, y in whole]
+        return float(sum(float((e ** 2).sum()) for e in err) / sum(e.numel() for e in err))
     for epoch in range(epochs):
         for group in opt.param_groups:
             group["lr"] = learning_rate_at(lr_schedule, learning_rate, epoch, epochs)
@@ -198,15 +208,8 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             total += loss.item() * len(idx)
         record = {"stage": "speech", "epoch": epoch + 1, "train_loss": total / len(xt),
                   "seconds": time.perf_counter() - start}
-        if val is not None:
-            judged.eval()
-            with torch.no_grad():
-                record["val_loss"] = float(nn.functional.mse_loss(judged(val[0]), val[1]))
-        elif whole:
-            judged.eval()
-            with torch.no_grad():
-                err = [_decoded(judged, dae, x) - y for x, y in whole]
-            record["val_loss"] = float(sum(float((e ** 2).sum()) for e in err) / sum(e.numel() for e in err))
+        if len(val_speech):
+            record["val_loss"] = validation_loss()
         history.append(record)
         stop = best.update(record)
         if on_epoch is not None:
