@@ -17,7 +17,8 @@ def _net(**changes):
     return GesticulatorNet(config).eval()
 
 
-@pytest.mark.parametrize("changes", [{}, {"film": False}, {"autoregressive": False}, {"past": 3, "future": 5}])
+@pytest.mark.parametrize("changes", [{}, {"film": False}, {"autoregressive": False}, {"past": 3, "future": 5},
+                                     {"film_identity": True, "frame_layers": 2}])
 def test_speech_codes_of_a_sequence_equal_one_window_at_a_time(changes):
     net = _net(**changes)
     c = net.config
@@ -29,6 +30,25 @@ def test_speech_codes_of_a_sequence_equal_one_window_at_a_time(changes):
         for k in range(8):
             one = net(speech[:, k:k + c.window], prev if c.autoregressive else None)
             torch.testing.assert_close(net.decode(codes[:, k], prev if c.autoregressive else None), one)
+
+
+def test_the_original_codes_film_is_the_identity_until_trained():
+    """film_identity: x * (1 + alpha) + beta from a zero-initialised layer, so at the start the previous poses do
+    not change the output; the paper's form (x * alpha + beta from a random encoder) scales the speech code."""
+    net = _net(film_identity=True)
+    codes = torch.randn(5, 12)
+    out = net.decode(codes, torch.randn(5, net.config.n_prev_poses, 9))
+    torch.testing.assert_close(out, net.decode(codes, torch.zeros(5, net.config.n_prev_poses, 9)))
+    torch.testing.assert_close(out, net.output(codes))
+    paper = _net()
+    assert not torch.allclose(paper.decode(codes, torch.zeros(5, 3, 9)), paper.output(codes))
+
+
+def test_the_frame_encoder_has_one_or_two_layers():
+    linear = [m for m in _net(frame_layers=2).frame_encoder if isinstance(m, torch.nn.Linear)]
+    assert [(m.in_features, m.out_features) for m in linear] == [(10, 16), (16, 8)]
+    with pytest.raises(ValueError, match="frame_layers must be 1 or 2"):
+        _net(frame_layers=3)
 
 
 def test_too_short_a_sequence_and_a_missing_previous_pose_are_refused():

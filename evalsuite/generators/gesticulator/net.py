@@ -51,6 +51,8 @@ class GesticulatorConfig:
     use_text: bool = True
     autoregressive: bool = True
     film: bool = True
+    film_identity: bool = False   # FiLM as x * (1 + alpha) + beta from a zero-initialised encoder (identity at start)
+    frame_layers: int = 1         # layers of the per-frame encoder (2: input -> 2 frame_dim -> frame_dim)
     extra: dict = field(default_factory=dict)
 
     @property
@@ -77,8 +79,13 @@ class GesticulatorNet(nn.Module):
     def __init__(self, config: GesticulatorConfig):
         super().__init__()
         self.config = c = config
-        self.frame_encoder = nn.Sequential(nn.Linear(c.audio_dim + c.text_dim, c.frame_dim), nn.Tanh(),
-                                           nn.Dropout(c.dropout))
+        if c.frame_layers not in (1, 2):
+            raise ValueError(f"frame_layers must be 1 or 2, got {c.frame_layers}")
+        widths = [c.audio_dim + c.text_dim] + ([2 * c.frame_dim] if c.frame_layers == 2 else []) + [c.frame_dim]
+        frame_layers: list[nn.Module] = []
+        for a, b in zip(widths[:-1], widths[1:]):
+            frame_layers += [nn.Linear(a, b), nn.Tanh(), nn.Dropout(c.dropout)]
+        self.frame_encoder = nn.Sequential(*frame_layers)
         layers: list[nn.Module] = []
         width = c.window * c.frame_dim
         for h in c.hidden:
@@ -88,9 +95,15 @@ class GesticulatorNet(nn.Module):
         self.hidden_width = width
         if c.autoregressive:
             cond_out = 2 * width if c.film else c.film_dim // 2
-            self.pose_encoder = nn.Sequential(nn.Dropout(c.prev_pose_dropout),
-                                              nn.Linear(c.n_prev_poses * c.pose_dim, c.film_dim), nn.Tanh(),
-                                              nn.Linear(c.film_dim, cond_out))
+            if c.film_identity:
+                first = nn.Linear(c.n_prev_poses * c.pose_dim, cond_out)
+                nn.init.zeros_(first.weight)
+                nn.init.zeros_(first.bias)
+                self.pose_encoder = nn.Sequential(first, nn.Tanh(), nn.Dropout(c.prev_pose_dropout))
+            else:
+                self.pose_encoder = nn.Sequential(nn.Dropout(c.prev_pose_dropout),
+                                                  nn.Linear(c.n_prev_poses * c.pose_dim, c.film_dim), nn.Tanh(),
+                                                  nn.Linear(c.film_dim, cond_out))
             out_in = width if c.film else width + cond_out
         else:
             out_in = width
@@ -126,7 +139,7 @@ class GesticulatorNet(nn.Module):
             cond = self.pose_encoder(prev_poses.reshape(len(codes), -1))
             if c.film:
                 alpha, beta = cond.chunk(2, dim=-1)
-                x = x * alpha + beta
+                x = x * (1 + alpha) + beta if c.film_identity else x * alpha + beta
             else:
                 x = torch.cat([x, cond], dim=-1)
         return self.output(x)

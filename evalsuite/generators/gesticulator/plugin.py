@@ -80,6 +80,12 @@ class Gesticulator(Generator):
                                "widest dimension's (default 0, the paper's unit variance; 0.1 scales idle sway as "
                                "the other re-implementations do, which on the synthetic speaker raised the held-out "
                                "pose error from 0.52 to 0.62 x mean pose)",
+                "film_identity": "false (default: FiLM as the paper's equation, x * alpha + beta, with alpha and beta "
+                                 "from a two-layer pose encoder fed dropped-out poses); true: as the original code, "
+                                 "x * (1 + alpha) + beta from one zero-initialised layer with dropout after it "
+                                 "(identity at the start of training)",
+                "frame_layers": "layers of the per-frame speech encoder (default 1; 2: as the original code, input -> "
+                                "2 x frame encoding -> frame encoding)",
                 "zero_audio": "at generation: replace the audio features by their training mean (shows what the "
                               "text path alone does)"},
         deviations=(
@@ -113,7 +119,9 @@ class Gesticulator(Generator):
                 "dropout": self.float_option("dropout", 0.5), "weight_decay": self.float_option("weight_decay", 1e-3),
                 "prev_pose_dropout": self.float_option("prev_pose_dropout", 0.8),
                 "scale_floor": self.fraction_option("scale_floor", 0.0),
-                "velocity_weight": self.float_option("velocity_weight", 0.6), "ema": self.fraction_option("ema", 0.0)}
+                "velocity_weight": self.float_option("velocity_weight", 0.6), "ema": self.fraction_option("ema", 0.0),
+                "film_identity": self.bool_option("film_identity", False),
+                "frame_layers": int(self.choice_option("frame_layers", "1", ("1", "2")))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -133,7 +141,8 @@ class Gesticulator(Generator):
                                     use_audio="audio" in st["inputs"], use_text="text" in st["inputs"],
                                     autoregressive=st["autoregressive"], film=st["film"], past=st["past"],
                                     future=st["future"], dropout=st["dropout"],
-                                    prev_pose_dropout=st["prev_pose_dropout"], **SIZES[st["size"]])
+                                    prev_pose_dropout=st["prev_pose_dropout"], film_identity=st["film_identity"],
+                                    frame_layers=st["frame_layers"], **SIZES[st["size"]])
         schedule = replace(budgeted_schedule(st["epochs"]), batch_size=st["batch_size"],
                            learning_rate=st["learning_rate"], lr_schedule=st["lr_schedule"],
                            sequence=st["past"] + PREDICTED_FRAMES + st["future"])
