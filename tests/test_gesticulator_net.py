@@ -51,6 +51,20 @@ def test_the_frame_encoder_has_one_or_two_layers():
         _net(frame_layers=3)
 
 
+def test_text_dropout_drops_only_the_text_features_and_only_in_training():
+    net = _net(text_dropout=0.5, dropout=0.0, prev_pose_dropout=0.0)
+    speech = torch.randn(3, net.config.window + 4, 10)
+    audio_only = speech.clone()
+    audio_only[..., 6:] = 0.0
+    net.train()
+    # with no text there is nothing to drop: two passes agree; with text they differ
+    torch.testing.assert_close(net.speech_codes(audio_only), net.speech_codes(audio_only))
+    assert not torch.allclose(net.speech_codes(speech), net.speech_codes(speech))
+    net.eval()
+    torch.testing.assert_close(net.speech_codes(speech), net.speech_codes(speech))
+    torch.testing.assert_close(net.speech_codes(speech), _net(dropout=0.0).speech_codes(speech))
+
+
 def test_too_short_a_sequence_and_a_missing_previous_pose_are_refused():
     net = _net()
     with pytest.raises(ValueError, match="fewer than the model's window"):

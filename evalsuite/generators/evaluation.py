@@ -100,6 +100,36 @@ def natural_through_rate(corpus: Corpus, folder: str | pathlib.Path, fps: float,
     return folder
 
 
+def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k: int = 16, fps: float | None = None,
+                                  split: str = "test", first_seed: int = 1000) -> pathlib.Path:
+    """Write, per segment of a synthetic-speaker corpus, the mean world positions of ``k`` performances of its
+    speech (motion seeds ``first_seed`` ... ``first_seed + k - 1``) into ``folder`` (``<segment>.npz``), resampled
+    to ``fps`` and back when given.
+
+    The estimate of the conditional mean of the pose given the speech: what a deterministic model trained on the
+    pose error converges to at best, so the reference for what such a model can reach on the other criteria
+    (``evalsuite.corpus.synth``; ``benchmarks/bench_speaker_chance.py`` measures its pose error)."""
+    from evalsuite.corpus.synth.oracle import segment_oracle
+
+    if k < 1:
+        raise InputError(f"k must be at least 1, got {k}")
+    if not corpus.meta.get("model") and not (corpus.root / "corpus.json").is_file():
+        raise InputError("the conditional mean needs a synthetic-speaker corpus (its corpus.json holds the model)",
+                         path=corpus.root)
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for seg in corpus.split(split):
+        performances = [segment_oracle(corpus, seg.id, seed=first_seed + i)[0] for i in range(k)]
+        n = min(m.n_frames for m in performances)
+        first = performances[0]
+        mean = Motion.from_positions(np.mean([m.positions()[:n] for m in performances], axis=0),
+                                     first.joint_names, first.fps, first.parents, name=seg.id)
+        if fps is not None:
+            mean = resample(resample(mean, fps), first.fps)
+        save_motion(mean, folder / f"{seg.id}.npz")
+    return folder
+
+
 def swapped_audio(requests: Sequence[Any]) -> list[Any]:
     """The requests with each segment's audio replaced by the next segment's (a cyclic derangement; the
     duration stays the segment's, so features are cropped or padded to it): does a model use the speech?"""

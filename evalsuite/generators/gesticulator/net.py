@@ -15,7 +15,7 @@ Per output frame t the model reads a window of speech frames t-10 ... t+19 (0.5 
 
 Ablations of the paper's Table 2 are options: ``use_audio=False`` / ``use_text=False`` zero one input stream,
 ``autoregressive=False`` drops the previous-pose conditioning, ``film=False`` concatenates the pose encoding
-to the activation instead of FiLM.
+to the activation instead of FiLM. ``text_dropout`` (not in the paper) drops text features at the input in training.
 """
 from __future__ import annotations
 
@@ -53,6 +53,7 @@ class GesticulatorConfig:
     film: bool = True
     film_identity: bool = False   # FiLM as x * (1 + alpha) + beta from a zero-initialised encoder (identity at start)
     frame_layers: int = 1         # layers of the per-frame encoder (2: input -> 2 frame_dim -> frame_dim)
+    text_dropout: float = 0.0     # dropout of the text features at the input, in training (not in the paper)
     extra: dict = field(default_factory=dict)
 
     @property
@@ -122,6 +123,11 @@ class GesticulatorNet(nn.Module):
         Each frame is encoded once and the windows are cut from the encodings, so a sequence costs one
         frame encoding per frame instead of one per frame and window position (the same function)."""
         c = self.config
+        if self.training and c.text_dropout > 0:
+            # in training only: each text value is zeroed (the training mean) with this probability, the rest
+            # scaled by 1 / (1 - p), so that the word vectors cannot carry what the audio can
+            speech = torch.cat([speech[..., :c.audio_dim],
+                                nn.functional.dropout(speech[..., c.audio_dim:], c.text_dropout, True)], dim=-1)
         b, length, _ = speech.shape
         if length < c.window:
             raise ValueError(f"{length} speech frames are fewer than the model's window of {c.window}")
