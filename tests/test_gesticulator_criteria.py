@@ -8,7 +8,8 @@ trains the same schedule), and the audio-only ablation for 30 (it only has to sh
 about 11 minutes in all.
 
 What the issue asks and what this test holds (docs/generators.md, "Learning criteria of gesticulator"), with the
-defaults (velocity weight 7, text dropout 0.8, dropout 0.1) in three trainings, seeds 0 / 1 / 2 on this machine:
+defaults (velocity weight 7, text dropout 0.8, dropout 0.1) in three trainings, seeds 0 / 1 / 2 on this machine
+(a fourth, seed 3: 0.60, 1.46, 0.61 and 0.499 silenced, r 0.534):
 
 * pose error <= 0.6 x mean pose's: 0.58, 0.58, 0.54. A machine whose features differ by 1e-7 trains a different
   model (trainings of one configuration scatter by about 0.05), so the test asks <= 0.65.
