@@ -115,8 +115,16 @@ def test_conditional_mean_of_performances_beats_one_performance_and_keeps_the_co
     assert via20["pose_mse"] == pytest.approx(mean["pose_mse"], rel=0.05)
 
 
-def test_conditional_mean_needs_at_least_one_performance(corpus, tmp_path):
+def test_conditional_mean_needs_a_synthetic_corpus_and_one_performance(corpus, tmp_path):
+    import dataclasses
+
     from evalsuite.errors import InputError
 
     with pytest.raises(InputError, match="k must be at least 1"):
         conditional_mean_through_rate(corpus, tmp_path / "none", 0)
+    elsewhere = dataclasses.replace(corpus, root=tmp_path, meta={})   # a corpus without the speaker's corpus.json
+    with pytest.raises(InputError, match="not a synthetic-speaker corpus"):
+        conditional_mean_through_rate(elsewhere, tmp_path / "none")
+    (tmp_path / "corpus.json").write_text('{"format": "genea"}', encoding="utf-8")
+    with pytest.raises(InputError, match="expected format"):
+        conditional_mean_through_rate(elsewhere, tmp_path / "none")

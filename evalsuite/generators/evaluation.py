@@ -109,13 +109,13 @@ def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k:
     The estimate of the conditional mean of the pose given the speech: what a deterministic model trained on the
     pose error converges to at best, so the reference for what such a model can reach on the other criteria
     (``evalsuite.corpus.synth``; ``benchmarks/bench_speaker_chance.py`` measures its pose error)."""
+    from evalsuite.corpus.synth.layout import read_meta
     from evalsuite.corpus.synth.oracle import segment_oracle
 
     if k < 1:
         raise InputError(f"k must be at least 1, got {k}")
-    if not corpus.meta.get("model") and not (corpus.root / "corpus.json").is_file():
-        raise InputError("the conditional mean needs a synthetic-speaker corpus (its corpus.json holds the model)",
-                         path=corpus.root)
+    if not corpus.meta.get("model"):
+        read_meta(corpus.root)   # a clear error unless the folder holds a synthetic speaker's corpus.json
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for seg in corpus.split(split):
