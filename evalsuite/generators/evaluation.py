@@ -13,6 +13,7 @@ and speech and returns, averaged over segments:
 """
 from __future__ import annotations
 
+import dataclasses
 import pathlib
 from collections.abc import Sequence
 from typing import Any
@@ -115,7 +116,8 @@ def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k:
     if k < 1:
         raise InputError(f"k must be at least 1, got {k}")
     if not corpus.meta.get("model"):
-        read_meta(corpus.root)   # a clear error unless the folder holds a synthetic speaker's corpus.json
+        # read corpus.json once (a clear error unless it is a synthetic speaker's), not once per performance
+        corpus = dataclasses.replace(corpus, meta=read_meta(corpus.root))
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for seg in corpus.split(split):
@@ -133,8 +135,6 @@ def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k:
 def swapped_audio(requests: Sequence[Any]) -> list[Any]:
     """The requests with each segment's audio replaced by the next segment's (a cyclic derangement; the
     duration stays the segment's, so features are cropped or padded to it): does a model use the speech?"""
-    import dataclasses
-
     if len(requests) < 2:
         raise InputError("swapping audio needs at least two segments")
     return [dataclasses.replace(r, audio=requests[(i + 1) % len(requests)].audio) for i, r in enumerate(requests)]
