@@ -43,3 +43,23 @@ def test_validate_on_must_be_targets_or_poses():
     assert err.value.field == "validate_on"
     with pytest.raises(ValueError, match="validate_on must be 'targets' or 'poses'"):
         train_system("aud2pose", [np.zeros((120, 26), np.float32)], [np.zeros((120, 3))], validate_on="codes")
+
+
+@pytest.mark.parametrize("validate_on", ["poses", "targets"])
+def test_autoencoder_of_poses_and_velocities_codes_both_and_decodes_poses(validate_on):
+    """``dae_inputs=poses+velocities`` (the paper's Japanese-data setup): the autoencoder reconstructs each pose
+    with its frame difference; the speech network's targets are those codes; generation keeps only the poses."""
+    rng = np.random.default_rng(1)
+    speech, poses = _segments(rng, [230, 260, 240])
+    val_speech, val_poses = _segments(rng, [170])
+    torch.set_num_threads(1)
+    model = train_system("aud2repr2pose", speech, poses, epochs=3, dae_epochs=2, code_dim=8, batch_size=4,
+                         seed=0, val_speech=val_speech, val_poses=val_poses, validate_on=validate_on,
+                         dae_velocities=True, config={"width": 16})
+    assert model.dae is not None and model.dae.encoder.in_features == 24 and model.dae.pose_dim == 12
+    assert generate(model, val_speech[0]).shape == (170, 12)
+    # the code carries the motion: a pose held still and the same pose moving apart encode differently
+    still = torch.zeros(2, 24)
+    moving = still.clone()
+    moving[:, 12:] = 1.0
+    assert not torch.allclose(model.dae.encode(still), model.dae.encode(moving))

@@ -85,6 +85,27 @@ def test_training_twice_with_one_seed_gives_the_same_weights(corpus, tmp_path_fa
     assert hashes[0] == hashes[1]
 
 
+def test_aud2repr2pose_model_folders_of_either_autoencoder_load(corpus, test_requests, tmp_path_factory):
+    """The autoencoder of poses and velocities (the default) and of poses alone (``dae_inputs=poses``, and every
+    model folder saved before the option existed, whose settings.json does not name it) both load and generate;
+    so does a speech network with the velocity target (``velocity_target=true``; off by default, as the paper)."""
+    entry = find_generator("aud2repr2pose")
+    for inputs, velocity in (("poses+velocities", False), ("poses", True)):
+        model = _trained("aud2repr2pose", corpus, tmp_path_factory, None, epochs=2, dae_epochs=1,
+                         dae_inputs=inputs, velocity_target=velocity)
+        settings = json.loads((model / "settings.json").read_text())
+        assert settings["dae_inputs"] == inputs and settings["net"]["velocity_target"] is velocity
+        out = tmp_path_factory.mktemp("a2r_dae")
+        generate(entry, test_requests[:1], out / "a", model_dir=model, progress=False)
+        first = sorted((out / "a").glob("*.bvh"))
+        assert len(first) == 1
+        if inputs == "poses":   # a folder from before: no dae_inputs in its settings
+            del settings["dae_inputs"]
+            (model / "settings.json").write_text(json.dumps(settings))
+            generate(entry, test_requests[:1], out / "b", model_dir=model, progress=False)
+            assert (out / "b" / first[0].name).read_bytes() == first[0].read_bytes()
+
+
 def test_natural_motion_through_20_fps_keeps_its_poses_but_loses_energy_coupling(corpus, tmp_path):
     """The benchmark's first reference row: a 20-fps copy of the speaker's performance. Its poses and keyword
     gestures are the natural ones, but the syllable-long wrist flicks are smoothed, so the energy / wrist-speed r

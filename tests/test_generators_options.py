@@ -38,3 +38,15 @@ def test_a_bad_value_names_the_option(name, option, value, expected):
     with pytest.raises(GeneratorError, match=expected) as err:
         g._settings()
     assert err.value.field == option
+
+
+@pytest.mark.parametrize(("name", "velocity", "dae_inputs"), [("aud2pose", True, "poses+velocities"),
+                                                              ("aud2motion", False, "poses+velocities"),
+                                                              ("aud2repr2pose", False, "poses+velocities")])
+def test_aud2_defaults_are_the_papers_velocity_target_and_the_japanese_autoencoder(name, velocity, dae_inputs):
+    settings = _configured(name)._settings()
+    assert settings["velocity_target"] is velocity and settings["dae_inputs"] == dae_inputs
+    assert _configured(name, velocity_target="true", dae_inputs="poses")._settings()["velocity_target"] is True
+    with pytest.raises(GeneratorError, match="dae_inputs") as err:
+        _configured(name, dae_inputs="velocities")._settings()
+    assert err.value.field == "dae_inputs"

@@ -104,18 +104,24 @@ class MotionDAE(nn.Module):
 
     feature_std: torch.Tensor
 
-    def __init__(self, pose_dim: int, code_dim: int, noise: float = 0.05):
+    def __init__(self, pose_dim: int, code_dim: int, noise: float = 0.05, velocities: bool = False):
         super().__init__()
-        self.encoder = nn.Linear(pose_dim, code_dim)
-        self.decoder = nn.Linear(code_dim, pose_dim)
+        width = pose_dim * (2 if velocities else 1)
+        self.encoder = nn.Linear(width, code_dim)
+        self.decoder = nn.Linear(code_dim, width)
         self.noise = noise
-        self.register_buffer("feature_std", torch.ones(pose_dim))
+        self.pose_dim = pose_dim
+        self.register_buffer("feature_std", torch.ones(width))
 
     def encode(self, x: torch.Tensor) -> torch.Tensor:
         return torch.tanh(self.encoder(x))
 
     def decode(self, code: torch.Tensor) -> torch.Tensor:
         return torch.tanh(self.decoder(code))
+
+    def pose(self, code: torch.Tensor) -> torch.Tensor:
+        """The decoded pose (B, D) without the velocities, when the autoencoder also learned those."""
+        return self.decode(code)[..., :self.pose_dim]
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         if self.training and self.noise > 0:

@@ -62,6 +62,10 @@ OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-fra
            "threads": "torch threads (default 1)",
            "ema": "decay of an exponential moving average of the weights per optimiser step (default 0.99; 0: "
                   "off, the paper's); the average is what is validated and kept",
+           "velocity_target": "the pose's frame difference as a second training target, discarded at generation "
+                              "(default: on for aud2pose, off for aud2motion and aud2repr2pose, as the paper)",
+           "dae_inputs": "aud2repr2pose: poses+velocities (default: the autoencoder codes each pose with its frame "
+                         "difference, as the paper's Japanese-data setup) or poses (the paper's English-data setup)",
            "validate_on": "poses (default: MSE of the normalised poses over whole validation segments, the "
                           "representation decoded) or targets (the training loss on validation chunks: the "
                           "representation for aud2repr2pose)"}
@@ -78,6 +82,7 @@ DEVIATIONS = ("The speech network runs in the sequence-level form by default (on
 
 class _Aud2(Generator):
     system: ClassVar[str]
+    velocity_target: ClassVar[bool]   # the default of the option of that name
 
     def _settings(self) -> dict[str, Any]:
         form = self.choice_option("form", "sequence", ("sequence", "windowed"))
@@ -97,7 +102,9 @@ class _Aud2(Generator):
                 "learning_rate": self.float_option("learning_rate", 1e-3), "threads": self.int_option("threads", 1),
                 "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR),
                 "lr_schedule": schedule, "ema": self.fraction_option("ema", 0.99),
-                "validate_on": self.choice_option("validate_on", "poses", ("poses", "targets"))}
+                "validate_on": self.choice_option("validate_on", "poses", ("poses", "targets")),
+                "velocity_target": self.bool_option("velocity_target", self.velocity_target),
+                "dae_inputs": self.choice_option("dae_inputs", "poses+velocities", ("poses+velocities", "poses"))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -115,13 +122,14 @@ class _Aud2(Generator):
         vspeech = [self._prosody(a.speech, seg.audio, rep.fps) if prosody else a.speech for a, seg in zip(va, val)]
         _, overrides = SYSTEMS[self.system]
         model = train_system(self.system, speech, [a.poses for a in tr],
-                             config={**overrides, "form": st["form"], "width": st["width"]},
+                             config={**overrides, "form": st["form"], "width": st["width"],
+                                     "velocity_target": st["velocity_target"]},
                              code_dim=st["code_dim"], dae_epochs=st["dae_epochs"], epochs=st["epochs"],
                              batch_size=st["batch_size"], learning_rate=st["learning_rate"], seed=seed,
                              val_speech=vspeech, val_poses=[a.poses for a in va],
                              budget_seconds=budget_seconds(budget_minutes), patience=st["patience"],
                              scale_floor=st["scale_floor"], lr_schedule=st["lr_schedule"], ema=st["ema"],
-                             validate_on=st["validate_on"],
+                             validate_on=st["validate_on"], dae_velocities=st["dae_inputs"] == "poses+velocities",
                              on_epoch=progress)
         rep.save(out_dir)
         sha = save_state(out_dir, "speech_net.pt", model.speech_net)
@@ -159,7 +167,8 @@ class _Aud2(Generator):
         load_state(model_dir, "speech_net.pt", net)
         dae = None
         if (model_dir / "motion_dae.pt").is_file():
-            dae = MotionDAE(saved["pose_dim"], saved["code_dim"])
+            dae = MotionDAE(saved["pose_dim"], saved["code_dim"],
+                            velocities=saved.get("dae_inputs") == "poses+velocities")
             load_state(model_dir, "motion_dae.pt", dae)
         norms = np.load(model_dir / "normalisers.npz")
         self.model = TrainedSystem(self.system, net, Standardiser(norms["speech_mean"], norms["speech_std"]),
@@ -190,6 +199,7 @@ def _spec(name: str, summary: str) -> GeneratorSpec:
 
 class Aud2Pose(_Aud2):
     system = "aud2pose"
+    velocity_target = True
     spec = _spec("aud2pose", "Re-implementation of Aud2Pose (Hasegawa et al. 2018 as in 'Moving fast and slow'; "
                              "not the published system): MFCC windows -> dense x3 -> bidirectional GRU -> pose "
                              "(+ velocity target).")
@@ -197,12 +207,14 @@ class Aud2Pose(_Aud2):
 
 class Aud2Motion(_Aud2):
     system = "aud2motion"
+    velocity_target = False
     spec = _spec("aud2motion", "Re-implementation of Aud2Motion ('Moving fast and slow'; not the published "
                                "system): MFCC sequence -> dense x3 -> causal GRU -> pose per frame.")
 
 
 class Aud2Repr2Pose(_Aud2):
     system = "aud2repr2pose"
+    velocity_target = False
     spec = _spec("aud2repr2pose", "Re-implementation of Aud2Repr2Pose ('Moving fast and slow'; not the published "
                                   "system): a denoising motion autoencoder learned first, MFCC -> its code -> "
                                   "its decoder.")

@@ -84,13 +84,15 @@ def _epochs(n_items: int, batch: int, rng: np.random.Generator):
 
 
 def train_dae(poses: Sequence[np.ndarray], code_dim: int, *, epochs: int = 20, batch_size: int = 128,
-              learning_rate: float = 1e-3, noise: float = 0.05, seed: int = 0,
+              learning_rate: float = 1e-3, noise: float = 0.05, seed: int = 0, pose_dim: int | None = None,
               on_epoch: Callable[[dict], None] | None = None) -> MotionDAE:
-    """MotionE/MotionD on normalised poses (N, D): denoising reconstruction with MSE."""
+    """MotionE/MotionD on normalised frames (N, D): denoising reconstruction with MSE. ``pose_dim``: when the
+    frames are poses followed by their velocities (N, 2 x pose_dim), the paper's Japanese-data setup."""
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     x = torch.from_numpy(np.concatenate(poses).astype(np.float32))
-    dae = MotionDAE(x.shape[1], code_dim, noise)
+    dim = x.shape[1] if pose_dim is None else pose_dim
+    dae = MotionDAE(dim, code_dim, noise, velocities=pose_dim is not None)
     dae.feature_std.copy_(x.std(0).clamp_min(1e-6))
     opt = torch.optim.Adam(dae.parameters(), lr=learning_rate)
     for epoch in range(epochs):
@@ -115,6 +117,11 @@ def _windows(speech: np.ndarray, context: int) -> np.ndarray:
     return np.lib.stride_tricks.sliding_window_view(padded, 2 * context + 1, axis=0).transpose(0, 2, 1)
 
 
+def _with_velocities(poses: Sequence[np.ndarray], velocity_norm: MaxAbsScaler) -> list[np.ndarray]:
+    """(T, D) normalised poses -> (T, 2D): each pose and its normalised frame difference (the first frame's 0)."""
+    return [np.concatenate([y, velocity_norm(np.diff(y, axis=0, prepend=y[:1]))], 1) for y in poses]
+
+
 def _chunks(x: np.ndarray, length: int) -> list[np.ndarray]:
     return [x[i:i + length] for i in range(0, len(x) - length + 1, length // 2)] or [x]
 
@@ -126,7 +133,7 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
                  val_speech: Sequence[np.ndarray] = (), val_poses: Sequence[np.ndarray] = (),
                  budget_seconds: float | None = None, patience: int | None = None, scale_floor: float = 0.0,
                  lr_schedule: str = "constant", ema: float = 0.0, validate_on: str = "targets",
-                 on_epoch: Callable[[dict], None] | None = None) -> TrainedSystem:
+                 dae_velocities: bool = False, on_epoch: Callable[[dict], None] | None = None) -> TrainedSystem:
     """Train one of ``SYSTEMS`` on segments; deterministic for a seed on one machine. With validation data the
     weights of the best validation epoch are kept (:class:`~evalsuite.generators.early_stopping.BestWeights`;
     ``patience``: stop after that many epochs without improvement). ``validate_on``: ``"targets"`` (the
@@ -142,10 +149,14 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
     xs = [speech_norm(s) for s in speech]
     ys = [pose_norm(p) for p in poses]
     dae = None
+    velocity_norm = MaxAbsScaler.fit([np.diff(y, axis=0) for y in ys], scale_floor) \
+        if uses_repr and dae_velocities else None
+    frames = _with_velocities(ys, velocity_norm) if velocity_norm is not None else None
     if uses_repr:
-        dae = train_dae(ys, code_dim, epochs=dae_epochs, seed=seed, on_epoch=on_epoch)
+        dae = train_dae(frames or ys, code_dim, epochs=dae_epochs, seed=seed, on_epoch=on_epoch,
+                        pose_dim=ys[0].shape[1] if frames else None)
         with torch.no_grad():
-            ys = [dae.encode(torch.from_numpy(y)).numpy() for y in ys]
+            ys = [dae.encode(torch.from_numpy(y)).numpy() for y in (frames or ys)]
     base = {"input_dim": xs[0].shape[1], "output_dim": ys[0].shape[1], **overrides, **(config or {})}
     net_config = SpeechNetConfig(**base)
     torch.manual_seed(seed)
@@ -175,6 +186,8 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
     elif len(val_speech):
         vy = [pose_norm(p) for p in val_poses]
         if dae is not None:
+            if velocity_norm is not None:
+                vy = _with_velocities(vy, velocity_norm)
             with torch.no_grad():
                 vy = [dae.encode(torch.from_numpy(y)).numpy() for y in vy]
         val = dataset([speech_norm(s) for s in val_speech], vy)
@@ -235,7 +248,7 @@ def _decoded(net: SpeechNet, dae: MotionDAE | None, x: np.ndarray, batch: int = 
     else:
         out = net(torch.from_numpy(x)[None])[0]
     out = out[:, :c.output_dim]
-    return dae.decode(out) if dae is not None else out
+    return dae.pose(out) if dae is not None else out
 
 
 @torch.no_grad()
