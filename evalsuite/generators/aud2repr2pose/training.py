@@ -148,15 +148,16 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
     speech_norm, pose_norm = Standardiser.fit(speech), MaxAbsScaler.fit(poses, scale_floor)
     xs = [speech_norm(s) for s in speech]
     ys = [pose_norm(p) for p in poses]
-    dae = None
-    velocity_norm = MaxAbsScaler.fit([np.diff(y, axis=0) for y in ys], scale_floor) \
-        if uses_repr and dae_velocities else None
-    frames = _with_velocities(ys, velocity_norm) if velocity_norm is not None else None
+    dae = velocity_norm = None
     if uses_repr:
-        dae = train_dae(frames or ys, code_dim, epochs=dae_epochs, seed=seed, on_epoch=on_epoch,
-                        pose_dim=ys[0].shape[1] if frames else None)
+        frames = ys   # what the autoencoder codes: the poses, or each pose followed by its velocity
+        if dae_velocities:
+            velocity_norm = MaxAbsScaler.fit([np.diff(y, axis=0) for y in ys], scale_floor)
+            frames = _with_velocities(ys, velocity_norm)
+        dae = train_dae(frames, code_dim, epochs=dae_epochs, seed=seed, on_epoch=on_epoch,
+                        pose_dim=ys[0].shape[1] if dae_velocities else None)
         with torch.no_grad():
-            ys = [dae.encode(torch.from_numpy(y)).numpy() for y in (frames or ys)]
+            ys = [dae.encode(torch.from_numpy(y)).numpy() for y in frames]
     base = {"input_dim": xs[0].shape[1], "output_dim": ys[0].shape[1], **overrides, **(config or {})}
     net_config = SpeechNetConfig(**base)
     torch.manual_seed(seed)
