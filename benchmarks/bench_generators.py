@@ -29,9 +29,16 @@ Issue 15's criteria follow for the systems of that issue that ran:
   r, the difference of two samples per segment, the phase classifier's F1; and the paper's Figure 1-style
   distribution plots of the full model, its ablations and natural motion (OUT/figures).
 
-Usage: python benchmarks/bench_generators.py [--minutes 30] [--seed 0] [--train-seed S] [--corpus DIR]
-       [--budget 9] [--only NAME ...] [--mogan-ablations mse_only,...] [--out DIR]
-Prints the tables (Markdown) and writes them to OUT/criteria.md / .csv and OUT/criteria_issue15.md / .json.
+With ``--train-seeds 0,1,2,3,4`` each system is trained once per seed (the paper of Aud2Repr2Pose averaged five
+re-trainings): one row per training, then a summary per system (mean and spread of the pose error and r, and in
+how many trainings issue 14's criteria held). ``--set KEY=VALUE`` passes an option to every system trained, to
+measure a variant the same way (e.g. ``--only aud2repr2pose --set dae_inputs=poses``).
+
+Usage: python benchmarks/bench_generators.py [--minutes 30] [--seed 0] [--train-seed S | --train-seeds S,S,...]
+       [--corpus DIR] [--budget 9] [--only NAME ...] [--set KEY=VALUE ...] [--mogan-ablations mse_only,...]
+       [--out DIR]
+Prints the tables (Markdown) and writes them to OUT/criteria.md / .csv, OUT/criteria_seeds.md (with several
+training seeds) and OUT/criteria_issue15.md / .json.
 Other processes on the machine slow every timing down; the script prints the load average.
 """
 from __future__ import annotations
@@ -70,6 +77,33 @@ SYSTEMS: dict[str, tuple[str, dict]] = {
 AUDIO_DRIVEN = {"gesticulator", "aud2pose", "aud2motion", "aud2repr2pose", "ferstl-mogan"}
 MOGAN_ABLATIONS = ("no_phase", "no_realism", "no_minibatch", "no_displacement", "mse_only")
 HOLDS = {">=": lambda v, b: v >= b, ">": lambda v, b: v > b, "<": lambda v, b: v < b}
+ISSUE14 = {"gesticulator", "aud2pose", "aud2motion", "aud2repr2pose"}   # the systems issue 14's criteria judge
+
+
+def issue14_holds(row: dict) -> bool:
+    """Issue 14's learning criteria for one training's row: pose error <= 0.6 x mean pose's, r >= 0.5, >= +20 %
+    error with another segment's audio; for gesticulator also lexical contrast >= half natural's, and present
+    (> 0) with the audio silenced."""
+    ok = (row["pose_err_vs_mean_pose"] <= 0.6 and row["energy_speed_r"] >= 0.5
+          and row["swapped_audio_err_ratio"] >= 1.2)
+    if row["generator"] == "gesticulator":
+        ok = ok and row["lexical_vs_natural"] >= 0.5 and row["lexical_text_only_vs_natural"] > 0
+    return bool(ok)
+
+
+def seeds_summary(rows: list[dict]) -> pd.DataFrame:
+    """Per system trained with several seeds: mean and standard deviation (ddof 1) of the pose error and r, their
+    range, and in how many trainings issue 14's criteria held."""
+    table = pd.DataFrame([r for r in rows if "train_seed" in r])
+    out = []
+    for name, group in table.groupby("generator", sort=False):
+        pose, r = group["pose_err_vs_mean_pose"], group["energy_speed_r"]
+        out.append({"generator": name, "trainings": len(group),
+                    "pose_err mean": pose.mean(), "pose_err sd": pose.std(), "pose_err range": f"{pose.min():.3f}-{pose.max():.3f}",
+                    "r mean": r.mean(), "r sd": r.std(), "r range": f"{r.min():.3f}-{r.max():.3f}",
+                    "criteria held": (f"{sum(issue14_holds(row) for row in group.to_dict('records'))} of {len(group)}"
+                                      if name in ISSUE14 else "")})
+    return pd.DataFrame(out)
 
 
 def markdown(table: pd.DataFrame) -> str:
@@ -86,6 +120,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", nargs="*", default=None)
     ap.add_argument("--seed", type=int, default=0, help="the synthetic corpus's seed")
     ap.add_argument("--train-seed", type=int, default=None, help="the trainings' seed (default: --seed)")
+    ap.add_argument("--train-seeds", default=None,
+                    help="comma-separated training seeds: each system trained once per seed, then summarised")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="options",
+                    help="an option for every system trained (repeatable)")
     ap.add_argument("--corpus", type=pathlib.Path, default=None, help="an existing corpus instead of a new one")
     ap.add_argument("--mogan-ablations", default="mse_only",
                     help=f"ferstl-mogan ablations trained beside it, comma-separated: {', '.join(MOGAN_ABLATIONS)}")
@@ -96,6 +134,17 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:
         ap.error(f"--mogan-ablations: unknown {unknown}; expected some of {', '.join(MOGAN_ABLATIONS)}")
     train_seed = args.seed if args.train_seed is None else args.train_seed
+    try:
+        seeds = [int(v) for v in args.train_seeds.split(",")] if args.train_seeds else [train_seed]
+    except ValueError:
+        ap.error(f"--train-seeds: expected comma-separated integers, got {args.train_seeds!r}")
+    if args.train_seeds and args.train_seed is not None:
+        ap.error("--train-seed and --train-seeds exclude each other")
+    bad = [o for o in args.options if "=" not in o]
+    if bad:
+        ap.error(f"--set: expected KEY=VALUE, got {bad[0]!r}")
+    options = dict(o.split("=", 1) for o in args.options)
+    train_seed = seeds[0]
     out = args.out or pathlib.Path(tempfile.mkdtemp(prefix="bench-generators-"))
     corpus_dir = args.corpus or out / "corpus"
     print(f"load average at start: {os.getloadavg()}", flush=True)
@@ -122,33 +171,37 @@ def main(argv: list[str] | None = None) -> int:
     for row in rows:
         print(json.dumps({k: (round(v, 3) if isinstance(v, float) else v) for k, v in row.items()}), flush=True)
     trained = {}
-    for name, (generator, config) in SYSTEMS.items():
-        if generator not in BUILTIN or (args.only and name not in args.only):
-            continue
+    runs = [(name, seed) for name, (generator, _) in SYSTEMS.items() for seed in seeds
+            if generator in BUILTIN and (not args.only or name in args.only)]
+    for name, seed in runs:
+        generator, config = SYSTEMS[name]
+        config = {**config, **options}
         entry = find_generator(generator)
+        run = name if len(seeds) == 1 else f"{name}_seed{seed}"   # folder names
         t1 = time.perf_counter()
-        result = train(entry, corpus, out / "models" / name, seed=train_seed, budget_minutes=args.budget,
+        result = train(entry, corpus, out / "models" / run, seed=seed, budget_minutes=args.budget,
                        config=config, progress=False)
         train_s = time.perf_counter() - t1
         t2 = time.perf_counter()
-        generate(entry, reqs, out / name, model_dir=out / "models" / name, progress=False, check_determinism=False)
+        generate(entry, reqs, out / run, model_dir=out / "models" / run, progress=False, check_determinism=False)
         gen_s = time.perf_counter() - t2
-        own = evaluate_condition(out / name, corpus)
-        trained[name] = (result, train_s, own)
-        row = {"generator": name, "epochs": len(result.history), "train_s": round(train_s),
+        own = evaluate_condition(out / run, corpus)
+        trained.setdefault(name, (result, train_s, own))   # issue 15's rows: the first seed's model
+        row = {"generator": name, **({"train_seed": seed} if len(seeds) > 1 else {}),
+               "epochs": len(result.history), "train_s": round(train_s),
                "speed_x_realtime": round(speech_s / gen_s), "pose_err_vs_mean_pose": own["pose_mse"] / base["pose_mse"],
                "energy_speed_r": own.get("energy_speed_r"),
                "lexical_vs_natural": own["lexical_mean"] / natural["lexical_mean"],
-               "weights_sha256": json.loads((out / "models" / name / "model.json").read_text()).get("weights_sha256",
-                                                                                                   "")[:12]}
+               "weights_sha256": json.loads((out / "models" / run / "model.json").read_text()).get("weights_sha256",
+                                                                                                  "")[:12]}
         if generator in AUDIO_DRIVEN:
-            generate(entry, swapped_audio(reqs), out / f"{name}_swapped", model_dir=out / "models" / name,
+            generate(entry, swapped_audio(reqs), out / f"{run}_swapped", model_dir=out / "models" / run,
                      progress=False, check_determinism=False)
-            row["swapped_audio_err_ratio"] = evaluate_condition(out / f"{name}_swapped", corpus)["pose_mse"] / own["pose_mse"]
+            row["swapped_audio_err_ratio"] = evaluate_condition(out / f"{run}_swapped", corpus)["pose_mse"] / own["pose_mse"]
         if name == "gesticulator":
-            generate(entry, reqs, out / f"{name}_text_only", model_dir=out / "models" / name,
+            generate(entry, reqs, out / f"{run}_text_only", model_dir=out / "models" / run,
                      config={"zero_audio": True}, progress=False, check_determinism=False)
-            row["lexical_text_only_vs_natural"] = (evaluate_condition(out / f"{name}_text_only", corpus)["lexical_mean"]
+            row["lexical_text_only_vs_natural"] = (evaluate_condition(out / f"{run}_text_only", corpus)["lexical_mean"]
                                                    / natural["lexical_mean"])
         rows.append(row)
         print(json.dumps({k: (round(v, 3) if isinstance(v, float) else v) for k, v in row.items()}), flush=True)
@@ -156,6 +209,10 @@ def main(argv: list[str] | None = None) -> int:
     print(markdown(table))
     table.to_csv(out / "criteria.csv", index=False)
     (out / "criteria.md").write_text(markdown(table) + "\n")
+    if len(seeds) > 1:
+        summary = markdown(seeds_summary(rows))
+        print(summary)
+        (out / "criteria_seeds.md").write_text(summary + "\n")
     print(f"mean_pose pose error {base['pose_mse']:.2f} units^2; natural lexical mean {natural['lexical_mean']:.2f}; "
           f"natural energy / wrist-speed r {natural.get('energy_speed_r', float('nan')):.3f}; outputs in {out}")
     issue15 = []
