@@ -133,18 +133,17 @@ def main(argv: list[str] | None = None) -> int:
     unknown = sorted(set(ablations) - set(MOGAN_ABLATIONS))
     if unknown:
         ap.error(f"--mogan-ablations: unknown {unknown}; expected some of {', '.join(MOGAN_ABLATIONS)}")
-    train_seed = args.seed if args.train_seed is None else args.train_seed
-    try:
-        seeds = [int(v) for v in args.train_seeds.split(",")] if args.train_seeds else [train_seed]
-    except ValueError:
-        ap.error(f"--train-seeds: expected comma-separated integers, got {args.train_seeds!r}")
     if args.train_seeds and args.train_seed is not None:
         ap.error("--train-seed and --train-seeds exclude each other")
+    try:
+        seeds = ([int(v) for v in args.train_seeds.split(",")] if args.train_seeds
+                 else [args.seed if args.train_seed is None else args.train_seed])
+    except ValueError:
+        ap.error(f"--train-seeds: expected comma-separated integers, got {args.train_seeds!r}")
     bad = [o for o in args.options if "=" not in o]
     if bad:
         ap.error(f"--set: expected KEY=VALUE, got {bad[0]!r}")
     options = dict(o.split("=", 1) for o in args.options)
-    train_seed = seeds[0]
     out = args.out or pathlib.Path(tempfile.mkdtemp(prefix="bench-generators-"))
     corpus_dir = args.corpus or out / "corpus"
     print(f"load average at start: {os.getloadavg()}", flush=True)
@@ -220,7 +219,7 @@ def main(argv: list[str] | None = None) -> int:
         result, _, own = trained["gesture2vec"]
         issue15 += gesture2vec_rows(corpus, out, result, own["lexical_mean"], natural["lexical_mean"])
     if "ferstl-mogan" in trained:
-        issue15 += ferstl_mogan_rows(corpus, out, trained["ferstl-mogan"][:2], ablations, train_seed, args.budget)
+        issue15 += ferstl_mogan_rows(corpus, out, trained["ferstl-mogan"][:2], ablations, seeds[0], args.budget)
     if issue15:
         lines = ["| system | criterion | measured | bound | holds |", "|---|---|---|---|---|"]
         for system, what, value, op, bound in issue15:

@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from evalsuite.corpus.types import Corpus
+from evalsuite.generators.aud2repr2pose.systems import SYSTEMS
 from evalsuite.generators.contract import (
     GenerationRequest,
     GenerationResult,
@@ -82,7 +83,6 @@ DEVIATIONS = ("The speech network runs in the sequence-level form by default (on
 
 class _Aud2(Generator):
     system: ClassVar[str]
-    velocity_target: ClassVar[bool]   # the default of the option of that name
 
     def _settings(self) -> dict[str, Any]:
         form = self.choice_option("form", "sequence", ("sequence", "windowed"))
@@ -103,14 +103,14 @@ class _Aud2(Generator):
                 "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR),
                 "lr_schedule": schedule, "ema": self.fraction_option("ema", 0.99),
                 "validate_on": self.choice_option("validate_on", "poses", ("poses", "targets")),
-                "velocity_target": self.bool_option("velocity_target", self.velocity_target),
+                "velocity_target": self.bool_option("velocity_target", SYSTEMS[self.system][1]["velocity_target"]),
                 "dae_inputs": self.choice_option("dae_inputs", "poses+velocities", ("poses+velocities", "poses"))}
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
         st = self._settings()
         torch_setup(seed, st["threads"])  # first: a clear message when torch is missing
-        from evalsuite.generators.aud2repr2pose.training import SYSTEMS, train_system
+        from evalsuite.generators.aud2repr2pose.training import train_system
 
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), st["representation"])
@@ -199,7 +199,6 @@ def _spec(name: str, summary: str) -> GeneratorSpec:
 
 class Aud2Pose(_Aud2):
     system = "aud2pose"
-    velocity_target = True
     spec = _spec("aud2pose", "Re-implementation of Aud2Pose (Hasegawa et al. 2018 as in 'Moving fast and slow'; "
                              "not the published system): MFCC windows -> dense x3 -> bidirectional GRU -> pose "
                              "(+ velocity target).")
@@ -207,14 +206,12 @@ class Aud2Pose(_Aud2):
 
 class Aud2Motion(_Aud2):
     system = "aud2motion"
-    velocity_target = False
     spec = _spec("aud2motion", "Re-implementation of Aud2Motion ('Moving fast and slow'; not the published "
                                "system): MFCC sequence -> dense x3 -> causal GRU -> pose per frame.")
 
 
 class Aud2Repr2Pose(_Aud2):
     system = "aud2repr2pose"
-    velocity_target = False
     spec = _spec("aud2repr2pose", "Re-implementation of Aud2Repr2Pose ('Moving fast and slow'; not the published "
                                   "system): a denoising motion autoencoder learned first, MFCC -> its code -> "
                                   "its decoder.")

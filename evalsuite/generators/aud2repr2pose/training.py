@@ -15,6 +15,7 @@ import torch
 from torch import nn
 
 from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
+from evalsuite.generators.aud2repr2pose.systems import SYSTEMS
 from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.scaling import floored_spread
 from evalsuite.generators.schedules import learning_rate_at
@@ -23,12 +24,6 @@ from evalsuite.generators.weight_averaging import WeightAverage
 __all__ = ["MaxAbsScaler", "Standardiser", "TrainedSystem", "train_dae", "train_system", "generate",
            "SYSTEMS"]
 
-# system name -> (uses the autoencoder's representation?, speech network overrides)
-SYSTEMS: dict[str, tuple[bool, dict]] = {
-    "aud2pose": (False, {}),
-    "aud2motion": (False, {"bidirectional": False, "form": "sequence", "velocity_target": False}),
-    "aud2repr2pose": (True, {"velocity_target": False}),
-}
 
 
 @dataclass
@@ -84,15 +79,14 @@ def _epochs(n_items: int, batch: int, rng: np.random.Generator):
 
 
 def train_dae(poses: Sequence[np.ndarray], code_dim: int, *, epochs: int = 20, batch_size: int = 128,
-              learning_rate: float = 1e-3, noise: float = 0.05, seed: int = 0, pose_dim: int | None = None,
+              learning_rate: float = 1e-3, noise: float = 0.05, seed: int = 0, velocities: bool = False,
               on_epoch: Callable[[dict], None] | None = None) -> MotionDAE:
-    """MotionE/MotionD on normalised frames (N, D): denoising reconstruction with MSE. ``pose_dim``: when the
-    frames are poses followed by their velocities (N, 2 x pose_dim), the paper's Japanese-data setup."""
+    """MotionE/MotionD on normalised frames (N, D): denoising reconstruction with MSE. ``velocities``: each frame
+    is a pose followed by its velocity (N, 2 x pose dimensions), the paper's Japanese-data setup."""
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     x = torch.from_numpy(np.concatenate(poses).astype(np.float32))
-    dim = x.shape[1] if pose_dim is None else pose_dim
-    dae = MotionDAE(dim, code_dim, noise, velocities=pose_dim is not None)
+    dae = MotionDAE(x.shape[1] // 2 if velocities else x.shape[1], code_dim, noise, velocities=velocities)
     dae.feature_std.copy_(x.std(0).clamp_min(1e-6))
     opt = torch.optim.Adam(dae.parameters(), lr=learning_rate)
     for epoch in range(epochs):
@@ -154,8 +148,7 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
         if dae_velocities:
             velocity_norm = MaxAbsScaler.fit([np.diff(y, axis=0) for y in ys], scale_floor)
             frames = _with_velocities(ys, velocity_norm)
-        dae = train_dae(frames, code_dim, epochs=dae_epochs, seed=seed, on_epoch=on_epoch,
-                        pose_dim=ys[0].shape[1] if dae_velocities else None)
+        dae = train_dae(frames, code_dim, epochs=dae_epochs, seed=seed, on_epoch=on_epoch, velocities=dae_velocities)
         with torch.no_grad():
             ys = [dae.encode(torch.from_numpy(y)).numpy() for y in frames]
     base = {"input_dim": xs[0].shape[1], "output_dim": ys[0].shape[1], **overrides, **(config or {})}

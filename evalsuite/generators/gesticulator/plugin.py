@@ -100,7 +100,7 @@ class Gesticulator(Generator):
             "dropped at the input with probability 0.8 in training (not in the paper), dropout 0.1 (paper 0.2), "
             "Adam weight decay 1e-3 (paper none). With the paper's alpha the motion is a low-pass of the speaker's "
             "(wrist velocity power at 2-6 Hz a quarter of natural's) and its wrist speed follows the speech energy "
-            "with r 0.34-0.39; with these r 0.53-0.54 at a pose error of 0.54-0.58 x mean pose's (three seeds).",
+            "with r 0.34-0.39; with these r 0.53-0.54 at a pose error of 0.54-0.60 x mean pose's (four seeds).",
             "Sizes: the CPU preset has 32-unit frame encodings and 256/128 hidden units (paper: 124, 612/256).",
             "Schedule: the paper's stages (pretraining without autoregression, teacher forcing every 16/8/4 "
             "frames, then free) compressed into the given epochs (90 by default); Adam 1e-3 instead of 1e-4 for short "
