@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from evalsuite.corpus import load_corpus
 from evalsuite.corpus.synth.corpus import synthesize_corpus
+from evalsuite.errors import InputError
 from evalsuite.generators import find_generator
 from evalsuite.generators.evaluation import (
+    causal_mean_through_rate,
     conditional_mean_through_rate,
     evaluate_condition,
     natural_through_rate,
@@ -136,10 +139,28 @@ def test_conditional_mean_of_performances_beats_one_performance_and_keeps_the_co
     assert via20["pose_mse"] == pytest.approx(mean["pose_mse"], rel=0.05)
 
 
+def test_causal_mean_knows_less_than_the_conditional_mean_and_more_than_nothing(corpus, tmp_path):
+    """The causal reference rows: per frame, the mean of performances whose words not yet begun are drawn at
+    random. The less of the speech is known, the larger the pose error: every word known (the conditional mean
+    given the whole speech) < words known from their start (a causal listener) < from 0.3 s into them < none known
+    (the mean over random speech with these timings). A seed gives the same files."""
+    def error(heard_after, name, seed=0):
+        folder = causal_mean_through_rate(corpus, tmp_path / name, 16, heard_after=heard_after, seed=seed)
+        return evaluate_condition(folder, corpus)["pose_mse"]
+
+    every, causal, late, none = (error(h, n) for h, n in ((-1e3, "every"), (0.0, "causal"), (0.3, "late"),
+                                                            (1e3, "none")))
+    assert every < 0.8 * causal and causal < late < none
+    assert len(list((tmp_path / "causal").glob("*.npz"))) == len(corpus.split("test"))
+    again = causal_mean_through_rate(corpus, tmp_path / "again", 16, seed=0)
+    for f in (tmp_path / "causal").glob("*.npz"):
+        np.testing.assert_array_equal(np.load(f)["positions"], np.load(again / f.name)["positions"])
+    with pytest.raises(InputError, match="k must be at least 1"):
+        causal_mean_through_rate(corpus, tmp_path / "none", 0)
+
+
 def test_conditional_mean_needs_a_synthetic_corpus_and_one_performance(corpus, tmp_path):
     import dataclasses
-
-    from evalsuite.errors import InputError
 
     with pytest.raises(InputError, match="k must be at least 1"):
         conditional_mean_through_rate(corpus, tmp_path / "none", 0)

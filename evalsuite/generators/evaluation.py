@@ -35,7 +35,8 @@ from evalsuite.motion.io import list_motion_files, load_motion, save_motion
 from evalsuite.motion.ops import resample
 from evalsuite.motion.presets import GENEA2020_UPPER
 
-__all__ = ["evaluate_condition", "POSITION_CLASSES", "segment_scores", "natural_through_rate"]
+__all__ = ["evaluate_condition", "POSITION_CLASSES", "segment_scores", "natural_through_rate",
+           "conditional_mean_through_rate", "causal_mean_through_rate"]
 
 POSITION_CLASSES = ("up", "wide", "self", "point")
 
@@ -128,6 +129,32 @@ def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k:
                                      first.joint_names, first.fps, first.parents, name=seg.id)
         if fps is not None:
             mean = resample(resample(mean, fps), first.fps)
+        save_motion(mean, folder / f"{seg.id}.npz")
+    return folder
+
+
+def causal_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k: int = 64, fps: float | None = None,
+                             split: str = "test", heard_after: float = 0.0, seed: int = 0) -> pathlib.Path:
+    """Write, per segment of a synthetic-speaker corpus, the estimated mean motion given only the speech heard so
+    far (:func:`evalsuite.corpus.synth.oracle.causal_mean_positions`: per frame, the mean of ``k`` performances in
+    which the words not yet begun, ``heard_after`` s after their start, are drawn at random from the training
+    transcripts) into ``folder`` (``<segment>.npz``), resampled to ``fps`` and back when given.
+
+    The counterpart of :func:`conditional_mean_through_rate` for causal models (Aud2Motion's forward GRU): what a
+    deterministic model that hears the speech only up to the frame it outputs can reach at best."""
+    from evalsuite.corpus.synth.layout import read_meta
+    from evalsuite.corpus.synth.oracle import causal_mean_positions
+
+    if k < 1:
+        raise InputError(f"k must be at least 1, got {k}")
+    if not corpus.meta.get("model"):
+        corpus = dataclasses.replace(corpus, meta=read_meta(corpus.root))
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for i, seg in enumerate(corpus.split(split)):
+        mean = causal_mean_positions(corpus, seg.id, k, heard_after, seed=seed + i)
+        if fps is not None:
+            mean = resample(resample(mean, fps), mean.fps)
         save_motion(mean, folder / f"{seg.id}.npz")
     return folder
 
