@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import pathlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -102,6 +102,27 @@ def natural_through_rate(corpus: Corpus, folder: str | pathlib.Path, fps: float,
     return folder
 
 
+def _write_means(corpus: Corpus, folder: str | pathlib.Path, k: int, fps: float | None, split: str,
+                 mean_of: Callable[[Corpus, int, Segment], Motion]) -> pathlib.Path:
+    """``mean_of(corpus, i, segment)`` for each segment of the split, resampled to ``fps`` and back when given,
+    into ``folder`` (``<segment>.npz``): the synthetic speaker's reference motions below."""
+    from evalsuite.corpus.synth.layout import read_meta
+
+    if k < 1:
+        raise InputError(f"k must be at least 1, got {k}")
+    if not corpus.meta.get("model"):
+        # read corpus.json once (a clear error unless it is a synthetic speaker's), not once per performance
+        corpus = dataclasses.replace(corpus, meta=read_meta(corpus.root))
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for i, seg in enumerate(corpus.split(split)):
+        mean = mean_of(corpus, i, seg)
+        if fps is not None:
+            mean = resample(resample(mean, fps), mean.fps)
+        save_motion(mean, folder / f"{seg.id}.npz")
+    return folder
+
+
 def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k: int = 16, fps: float | None = None,
                                   split: str = "test", first_seed: int = 1000) -> pathlib.Path:
     """Write, per segment of a synthetic-speaker corpus, the mean world positions of ``k`` performances of its
@@ -111,26 +132,15 @@ def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k:
     The estimate of the conditional mean of the pose given the speech: what a deterministic model trained on the
     pose error converges to at best, so the reference for what such a model can reach on the other criteria
     (``evalsuite.corpus.synth``; ``benchmarks/bench_speaker_chance.py`` measures its pose error)."""
-    from evalsuite.corpus.synth.layout import read_meta
     from evalsuite.corpus.synth.oracle import segment_oracle
 
-    if k < 1:
-        raise InputError(f"k must be at least 1, got {k}")
-    if not corpus.meta.get("model"):
-        # read corpus.json once (a clear error unless it is a synthetic speaker's), not once per performance
-        corpus = dataclasses.replace(corpus, meta=read_meta(corpus.root))
-    folder = pathlib.Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    for seg in corpus.split(split):
+    def mean_of(corpus: Corpus, _: int, seg: Segment) -> Motion:
         performances = [segment_oracle(corpus, seg.id, seed=first_seed + i)[0] for i in range(k)]
         n = min(m.n_frames for m in performances)
         first = performances[0]
-        mean = Motion.from_positions(np.mean([m.positions()[:n] for m in performances], axis=0),
+        return Motion.from_positions(np.mean([m.positions()[:n] for m in performances], axis=0),
                                      first.joint_names, first.fps, first.parents, name=seg.id)
-        if fps is not None:
-            mean = resample(resample(mean, fps), first.fps)
-        save_motion(mean, folder / f"{seg.id}.npz")
-    return folder
+    return _write_means(corpus, folder, k, fps, split, mean_of)
 
 
 def causal_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k: int = 64, fps: float | None = None,
@@ -138,25 +148,16 @@ def causal_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k: int 
     """Write, per segment of a synthetic-speaker corpus, the estimated mean motion given only the speech heard so
     far (:func:`evalsuite.corpus.synth.oracle.causal_mean_positions`: per frame, the mean of ``k`` performances in
     which the words not yet begun, ``heard_after`` s after their start, are drawn at random from the training
-    transcripts) into ``folder`` (``<segment>.npz``), resampled to ``fps`` and back when given.
+    transcripts; segment i's draws seeded ``seed + i``) into ``folder`` (``<segment>.npz``), resampled to ``fps``
+    and back when given.
 
-    The counterpart of :func:`conditional_mean_through_rate` for causal models (Aud2Motion's forward GRU): what a
-    deterministic model that hears the speech only up to the frame it outputs can reach at best."""
-    from evalsuite.corpus.synth.layout import read_meta
+    The counterpart of :func:`conditional_mean_through_rate` for causal models (Aud2Motion's forward GRU), an
+    estimate of what a deterministic model that hears the speech only up to the frame it outputs can reach; not a
+    strict bound (it is told when the coming words start, and does not know the grammar, which a model can learn)."""
     from evalsuite.corpus.synth.oracle import causal_mean_positions
 
-    if k < 1:
-        raise InputError(f"k must be at least 1, got {k}")
-    if not corpus.meta.get("model"):
-        corpus = dataclasses.replace(corpus, meta=read_meta(corpus.root))
-    folder = pathlib.Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    for i, seg in enumerate(corpus.split(split)):
-        mean = causal_mean_positions(corpus, seg.id, k, heard_after, seed=seed + i)
-        if fps is not None:
-            mean = resample(resample(mean, fps), mean.fps)
-        save_motion(mean, folder / f"{seg.id}.npz")
-    return folder
+    return _write_means(corpus, folder, k, fps, split,
+                        lambda corpus, i, seg: causal_mean_positions(corpus, seg.id, k, heard_after, seed=seed + i))
 
 
 def swapped_audio(requests: Sequence[Any]) -> list[Any]:

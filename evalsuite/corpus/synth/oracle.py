@@ -78,7 +78,8 @@ def causal_mean_positions(corpus: Corpus, segment_id: str, k: int = 64, heard_af
     mean over ``k`` performances (motion seeds drawn too) of such speech. Word timings and syllable onsets stay the
     segment's (generous to a causal listener: it is told when the coming words start, not what they are). The
     mean over all k performances of the segment's own transcript estimates E[motion | whole speech]
-    (:func:`segment_oracle`); this one E[motion_t | words begun by t]: what a causal model can reach at best.
+    (:func:`segment_oracle`); this one E[motion_t | words begun by t]: what a causal model can reach, estimated (not
+    a strict bound: it is told when the coming words start, and does not know the grammar, which a model can learn).
     """
     if k < 1:
         raise ValueError(f"k must be at least 1, got {k}")
