@@ -76,10 +76,10 @@ def causal_mean_positions(corpus: Corpus, segment_id: str, k: int = 64, heard_af
     For each frame t, the words whose start + ``heard_after`` (s) is after t are not known yet: they are replaced
     by words drawn at random (with their emphasis) from the corpus's training transcripts, and the frame is the
     mean over ``k`` performances (motion seeds drawn too) of such speech. Word timings and syllable onsets stay the
-    segment's (generous to a causal listener: it is told when the coming words start, not what they are). The
-    mean over all k performances of the segment's own transcript estimates E[motion | whole speech]
-    (:func:`segment_oracle`); this one E[motion_t | words begun by t]: what a causal model can reach, estimated (not
-    a strict bound: it is told when the coming words start, and does not know the grammar, which a model can learn).
+    segment's. The mean of performances of the segment's own transcript estimates E[motion | whole speech]
+    (:func:`segment_oracle`); this one E[motion_t | words begun by t]: what a causal model can reach, estimated, not
+    a strict bound (it is told when the coming words start, which is generous, and it does not know the grammar,
+    where a keyword may come, which a model can learn).
     """
     if k < 1:
         raise ValueError(f"k must be at least 1, got {k}")
