@@ -63,3 +63,25 @@ def test_autoencoder_of_poses_and_velocities_codes_both_and_decodes_poses(valida
     moving = still.clone()
     moving[:, 12:] = 1.0
     assert not torch.allclose(model.dae.encode(still), model.dae.encode(moving))
+
+
+def test_past_frames_give_each_frame_the_speech_before_it_and_nothing_after():
+    """``past_frames=k`` (sequence form): frame t's input holds, for each feature, its values at frames t-k+1 .. t
+    (zeros before the first frame); an output never depends on speech after its frame (the model stays causal)."""
+    from evalsuite.generators.aud2repr2pose.net import SpeechNet, SpeechNetConfig, with_past_frames
+
+    x = torch.arange(2 * 5 * 2, dtype=torch.float32).reshape(2, 5, 2)
+    stacked = with_past_frames(x, 3)
+    assert stacked.shape == (2, 5, 6)
+    assert stacked[1, 4].tolist() == [x[1, 2, 0], x[1, 3, 0], x[1, 4, 0], x[1, 2, 1], x[1, 3, 1], x[1, 4, 1]]
+    assert stacked[0, 0].tolist() == [0, 0, x[0, 0, 0], 0, 0, x[0, 0, 1]]
+    assert torch.equal(with_past_frames(x, 1), x)
+    torch.manual_seed(0)
+    net = SpeechNet(SpeechNetConfig(26, 12, width=16, bidirectional=False, form="sequence", velocity_target=False,
+                                    past_frames=10)).eval()
+    assert net.dense[0].linear.in_features == 260
+    speech = torch.randn(2, 60, 26)
+    later = speech.clone()
+    later[:, 40:] += 1.0
+    assert torch.equal(net(speech)[:, :40], net(later)[:, :40])
+    assert not torch.equal(net(speech)[:, 40:], net(later)[:, 40:])

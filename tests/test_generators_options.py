@@ -32,12 +32,21 @@ def test_numbers_and_flags_are_parsed_as_the_cli_gives_them():
     ("gesticulator", "ema", "abc", "ema must be a number"),
     ("ferstl-mogan", "scale_floor", "1.5", r"scale_floor must be in \[0, 1\)"),
     ("gesticulator", "velocity_weight", "x", "must be a finite number"),
+    ("aud2motion", "past_frames", "0", "past_frames must be at least 1"),
+    ("aud2pose", "past_frames", "2.5", "must be an integer"),
 ])
 def test_a_bad_value_names_the_option(name, option, value, expected):
     g = _configured(name, **{option: value})
     with pytest.raises(GeneratorError, match=expected) as err:
         g._settings()
     assert err.value.field == option
+
+
+def test_past_frames_are_refused_for_the_windowed_form():
+    g = _configured("aud2pose", form="windowed", past_frames=5)
+    with pytest.raises(GeneratorError, match="applies to the sequence form") as err:
+        g._settings()
+    assert err.value.field == "past_frames"
 
 
 @pytest.mark.parametrize(("name", "velocity", "dae_inputs"), [("aud2pose", True, "poses+velocities"),

@@ -24,7 +24,7 @@ from dataclasses import asdict, dataclass
 import torch
 from torch import nn
 
-__all__ = ["SpeechNetConfig", "SpeechNet", "MotionDAE", "DEVIATIONS"]
+__all__ = ["SpeechNetConfig", "SpeechNet", "MotionDAE", "DEVIATIONS", "with_past_frames"]
 
 DEVIATIONS = (
     "Sizes are options; the CPU preset narrows the 256-unit layers.",
@@ -47,6 +47,7 @@ class SpeechNetConfig:
     bidirectional: bool = True   # False for Aud2Motion (causal)
     form: str = "windowed"       # "windowed" (one window per frame) or "sequence" (per chunk)
     velocity_target: bool = True  # Aud2Pose's multitask velocity output
+    past_frames: int = 1         # sequence form: each frame's input with the frames before it (1: the frame alone)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -67,6 +68,15 @@ class _FrameDense(nn.Module):
         return self.drop(torch.relu(h))
 
 
+def with_past_frames(x: torch.Tensor, k: int) -> torch.Tensor:
+    """(B, T, F) -> (B, T, F k): for each feature, its values at frames t-k+1 .. t (zeros before the first frame);
+    k = 1 returns ``x``. Causal: frame t's input holds nothing after t."""
+    if k <= 1:
+        return x
+    b, t, _ = x.shape
+    return nn.functional.pad(x, (0, 0, k - 1, 0)).unfold(1, k, 1).reshape(b, t, -1)
+
+
 class SpeechNet(nn.Module):
     """windowed: (B, 2C+1, F) -> (B, out [x2 with velocity]); sequence: (B, T, F) -> (B, T, out [x2])."""
 
@@ -75,7 +85,7 @@ class SpeechNet(nn.Module):
         self.config = c = config
         if c.form not in ("windowed", "sequence"):
             raise ValueError(f"form must be 'windowed' or 'sequence', got {c.form!r}")
-        dims = [c.input_dim] + [c.width] * c.n_dense
+        dims = [c.input_dim * (c.past_frames if c.form == "sequence" else 1)] + [c.width] * c.n_dense
         self.dense = nn.Sequential(*[_FrameDense(a, b, c.dropout) for a, b in zip(dims, dims[1:])])
         self.gru = nn.GRU(c.width, c.width, batch_first=True, bidirectional=c.bidirectional)
         rec = c.width * (2 if c.bidirectional else 1)
@@ -85,6 +95,8 @@ class SpeechNet(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         c = self.config
+        if c.form == "sequence":
+            x = with_past_frames(x, c.past_frames)
         h = self.dense(x)
         seq, last = self.gru(h)
         if c.form == "windowed":

@@ -69,7 +69,9 @@ OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-fra
                          "difference, as the paper's Japanese-data setup) or poses (the paper's English-data setup)",
            "validate_on": "poses (default: MSE of the normalised poses over whole validation segments, the "
                           "representation decoded) or targets (the training loss on validation chunks: the "
-                          "representation for aud2repr2pose)"}
+                          "representation for aud2repr2pose)",
+           "past_frames": "sequence form: each frame's speech features with those of the frames before it, this "
+                          "many in all (default 1: the frame alone, the paper's)"}
 DEVIATIONS = ("The speech network runs in the sequence-level form by default (one bidirectional GRU pass per "
               "100-frame chunk instead of one 61-frame window per output frame: ~60x less computation on a CPU); "
               "form=windowed is the paper's.",
@@ -104,7 +106,18 @@ class _Aud2(Generator):
                 "lr_schedule": schedule, "ema": self.fraction_option("ema", 0.99),
                 "validate_on": self.choice_option("validate_on", "poses", ("poses", "targets")),
                 "velocity_target": self.bool_option("velocity_target", SYSTEMS[self.system][1]["velocity_target"]),
-                "dae_inputs": self.choice_option("dae_inputs", "poses+velocities", ("poses+velocities", "poses"))}
+                "dae_inputs": self.choice_option("dae_inputs", "poses+velocities", ("poses+velocities", "poses")),
+                "past_frames": self._past_frames(windowed)}
+
+    def _past_frames(self, windowed: bool) -> int:
+        k = self.int_option("past_frames", 1)
+        if k < 1:
+            raise GeneratorError(f"{self.spec.name}: option past_frames must be at least 1, got {k}",
+                                 field="past_frames")
+        if windowed and k > 1:
+            raise GeneratorError(f"{self.spec.name}: past_frames applies to the sequence form; the windowed form "
+                                 "already reads 30 frames either side", field="past_frames")
+        return k
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -123,7 +136,7 @@ class _Aud2(Generator):
         _, overrides = SYSTEMS[self.system]
         model = train_system(self.system, speech, [a.poses for a in tr],
                              config={**overrides, "form": st["form"], "width": st["width"],
-                                     "velocity_target": st["velocity_target"]},
+                                     "velocity_target": st["velocity_target"], "past_frames": st["past_frames"]},
                              code_dim=st["code_dim"], dae_epochs=st["dae_epochs"], epochs=st["epochs"],
                              batch_size=st["batch_size"], learning_rate=st["learning_rate"], seed=seed,
                              val_speech=vspeech, val_poses=[a.poses for a in va],
