@@ -49,6 +49,14 @@ def test_past_frames_are_refused_for_the_windowed_form():
     assert err.value.field == "past_frames"
 
 
+@pytest.mark.parametrize(("name", "past_frames"), [("aud2pose", 1), ("aud2motion", 5), ("aud2repr2pose", 1)])
+def test_only_aud2motion_reads_the_speech_before_each_frame_by_default(name, past_frames):
+    """The causal aud2motion reads each frame with the 4 before it (0.25 s, a documented deviation); the
+    bidirectional systems keep the paper's one frame per step, as does an explicit ``past_frames=1``."""
+    assert _configured(name)._settings()["past_frames"] == past_frames
+    assert _configured(name, past_frames="1")._settings()["past_frames"] == 1
+
+
 @pytest.mark.parametrize(("name", "velocity", "dae_inputs"), [("aud2pose", True, "poses+velocities"),
                                                               ("aud2motion", False, "poses+velocities"),
                                                               ("aud2repr2pose", False, "poses+velocities")])
