@@ -45,10 +45,11 @@ def _trained(name, corpus, tmp_path_factory, minutes, **config):
     return model
 
 
-def test_aud2repr2pose_follows_the_speech(corpus, test_requests, tmp_path_factory):
-    model = _trained("aud2repr2pose", corpus, tmp_path_factory, 0.4)
-    out = tmp_path_factory.mktemp("a2r_out")
-    entry = find_generator("aud2repr2pose")
+@pytest.mark.parametrize("name", ["aud2repr2pose", "aud2motion", "aud2pose"])
+def test_aud2_systems_follow_the_speech(corpus, test_requests, tmp_path_factory, name):
+    model = _trained(name, corpus, tmp_path_factory, 0.4)
+    out = tmp_path_factory.mktemp(f"{name}_out")
+    entry = find_generator(name)
     generate(entry, test_requests, out / "own", model_dir=model, progress=False)
     generate(entry, swapped_audio(test_requests), out / "swapped", model_dir=model, progress=False)
     own, swapped = evaluate_condition(out / "own", corpus), evaluate_condition(out / "swapped", corpus)
@@ -79,6 +80,7 @@ def test_gesticulator_trains_and_generates_from_audio_and_text(corpus, test_requ
 
 
 @pytest.mark.parametrize("name, options", [("aud2repr2pose", {"epochs": 3, "dae_epochs": 2}),
+                                           ("aud2motion", {"epochs": 3}),
                                            ("gesticulator", {"epochs": 5, "words": "hash"})])
 def test_training_twice_with_one_seed_gives_the_same_weights(corpus, tmp_path_factory, name, options):
     hashes = []
