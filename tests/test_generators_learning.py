@@ -111,6 +111,23 @@ def test_aud2repr2pose_model_folders_of_either_autoencoder_load(corpus, test_req
             assert (out / "b" / first[0].name).read_bytes() == first[0].read_bytes()
 
 
+def test_aud2motion_folders_from_before_past_frames_load_with_one_frame_per_step(corpus, test_requests,
+                                                                               tmp_path_factory):
+    """A model folder saved before the option existed (its settings name no ``past_frames``) was trained on one
+    frame per step; it loads as such, not with today's default of 5, and generates the same motion."""
+    entry = find_generator("aud2motion")
+    model = _trained("aud2motion", corpus, tmp_path_factory, None, epochs=2, past_frames=1)
+    out = tmp_path_factory.mktemp("a2m_old")
+    generate(entry, test_requests[:1], out / "a", model_dir=model, progress=False)
+    settings = json.loads((model / "settings.json").read_text())
+    assert settings["past_frames"] == 1 and settings["net"]["past_frames"] == 1
+    del settings["past_frames"], settings["net"]["past_frames"]
+    (model / "settings.json").write_text(json.dumps(settings))
+    generate(entry, test_requests[:1], out / "b", model_dir=model, progress=False)
+    first = sorted((out / "a").glob("*.bvh"))
+    assert len(first) == 1 and (out / "b" / first[0].name).read_bytes() == first[0].read_bytes()
+
+
 def test_natural_motion_through_20_fps_keeps_its_poses_but_loses_energy_coupling(corpus, tmp_path):
     """The benchmark's first reference row: a 20-fps copy of the speaker's performance. Its poses and keyword
     gestures are the natural ones, but the syllable-long wrist flicks are smoothed, so the energy / wrist-speed r
