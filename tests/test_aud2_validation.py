@@ -85,3 +85,5 @@ def test_past_frames_give_each_frame_the_speech_before_it_and_nothing_after():
     later[:, 40:] += 1.0
     assert torch.equal(net(speech)[:, :40], net(later)[:, :40])
     assert not torch.equal(net(speech)[:, 40:], net(later)[:, 40:])
+    with pytest.raises(ValueError, match="1 in the windowed form"):
+        SpeechNet(SpeechNetConfig(26, 12, form="windowed", past_frames=5))

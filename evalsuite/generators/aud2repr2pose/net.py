@@ -85,7 +85,9 @@ class SpeechNet(nn.Module):
         self.config = c = config
         if c.form not in ("windowed", "sequence"):
             raise ValueError(f"form must be 'windowed' or 'sequence', got {c.form!r}")
-        dims = [c.input_dim * (c.past_frames if c.form == "sequence" else 1)] + [c.width] * c.n_dense
+        if c.past_frames < 1 or (c.form == "windowed" and c.past_frames > 1):
+            raise ValueError(f"past_frames must be at least 1, and 1 in the windowed form; got {c.past_frames}")
+        dims = [c.input_dim * c.past_frames] + [c.width] * c.n_dense
         self.dense = nn.Sequential(*[_FrameDense(a, b, c.dropout) for a, b in zip(dims, dims[1:])])
         self.gru = nn.GRU(c.width, c.width, batch_first=True, bidirectional=c.bidirectional)
         rec = c.width * (2 if c.bidirectional else 1)
