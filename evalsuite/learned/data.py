@@ -8,15 +8,7 @@ import numpy as np
 
 from evalsuite import hashing
 from evalsuite.motion import Motion
-from evalsuite.motion.io import list_motion_files, load_motion_folder
-
-
-def motion_files(folder) -> list[pathlib.Path]:
-    """Motion files directly in ``folder`` (sorted by name), or the file itself; InputError if none."""
-    folder = pathlib.Path(folder)
-    if folder.is_file():
-        return [folder]
-    return list(list_motion_files(folder).values())
+from evalsuite.motion.io import load_motion_folder
 
 
 def load_folder(folder, *, convention: str | None = None, fps: float | None = None,

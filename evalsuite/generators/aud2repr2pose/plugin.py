@@ -9,7 +9,7 @@ post-processing (moving average, 1-euro) applies to the output with ``evalsuite 
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 import numpy as np
@@ -201,8 +201,6 @@ class _Aud2(Generator):
             speech = self._prosody(speech, request.audio, self.rep.fps)
         return GenerationResult(self.rep.decode(generate(self.model, speech)))
 
-    def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
-        return [self.generate(r) for r in requests]
 
 
 def _spec(name: str, summary: str) -> GeneratorSpec:

@@ -251,10 +251,3 @@ def generate(model: TrainedSystem, speech: np.ndarray, batch: int = 4096) -> np.
     model.speech_net.eval()
     out = _decoded(model.speech_net, model.dae, model.speech_norm(speech), batch)
     return model.pose_norm.inverse(out.numpy())
-
-
-def with_form(system: str, form: str) -> tuple[bool, dict]:
-    """The overrides of ``system`` with another speech-network form (e.g. the sequence-level deviation)."""
-    uses_repr, overrides = SYSTEMS[system]
-    return uses_repr, {**overrides, "form": form}
-

@@ -208,6 +208,3 @@ class FerstlMogan(Generator):
                                 name=self.spec.name).speech
         poses = generate_mogan(self.model, speech, seed=request.seed)
         return GenerationResult(self.rep.decode(poses), {"ablation": self.saved["ablation"]})
-
-    def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
-        return [self.generate(r) for r in requests]

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 import pathlib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -223,8 +223,6 @@ class Gesture2Vec(Generator):
                 "codes": [int(k) for k in codes], "chunk_frames": self.model.config.chunk}
         return GenerationResult(self.rep.decode(poses), meta)
 
-    def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
-        return [self.generate(r) for r in requests]
 
 
 def code_usage(generation_dir: str | pathlib.Path, model_dir: str | pathlib.Path) -> dict[str, float]:
