@@ -60,7 +60,6 @@ import numpy as np
 import pandas as pd
 
 from evalsuite.corpus import load_corpus
-from evalsuite.corpus.synth.corpus import synthesize_corpus
 from evalsuite.generators import find_generator
 from evalsuite.generators.evaluation import (
     causal_mean_through_rate,
@@ -74,6 +73,7 @@ from evalsuite.generators.registry import BUILTIN
 from evalsuite.generators.requests import requests_from_corpus
 from evalsuite.generators.runner import generate
 from evalsuite.generators.training import train
+from evalsuite.synth.corpus import synthesize_corpus
 
 # row label -> (generator, options); "gesticulator-audio" is the paper's audio-only ablation
 SYSTEMS: dict[str, tuple[str, dict]] = {

@@ -24,11 +24,11 @@ import tempfile
 import numpy as np
 
 from evalsuite.corpus import load_corpus
-from evalsuite.corpus.synth.corpus import synthesize_corpus
-from evalsuite.corpus.synth.oracle import segment_oracle
-from evalsuite.corpus.synth.params import MotionParams
 from evalsuite.motion import Motion
 from evalsuite.motion.presets import GENEA2020_UPPER
+from evalsuite.synth.corpus import synthesize_corpus
+from evalsuite.synth.oracle import segment_oracle
+from evalsuite.synth.params import MotionParams
 
 SETTINGS = ((0.8, 0.1, 0.1), (0.9, 0.05, 0.05), (0.9, 0.02, 0.08))
 

@@ -39,7 +39,7 @@ def main() -> None:
     ap.add_argument("--bootstrap", type=int, default=200)
     args = ap.parse_args()
 
-    from evalsuite.corpus.synth import Layout, synthesize_corpus
+    from evalsuite.synth import Layout, synthesize_corpus
     from evalsuite.validity.cli import run_validation
     from evalsuite.validity.report import markdown, speech_blind
 

@@ -19,7 +19,7 @@ def synth_corpus_dir() -> pathlib.Path:
     """Built once per test session (EVALSUITE_TEST_SYNTH_CORPUS names an existing one, for local iterations)."""
     import os
 
-    from evalsuite.corpus.synth.corpus import synthesize_corpus
+    from evalsuite.synth.corpus import synthesize_corpus
 
     if os.environ.get("EVALSUITE_TEST_SYNTH_CORPUS"):
         return pathlib.Path(os.environ["EVALSUITE_TEST_SYNTH_CORPUS"])

@@ -6,8 +6,8 @@ import pathlib
 
 import numpy as np
 
-from evalsuite.corpus.synth import Layout, MotionParams, read_synth_corpus, segment_oracle, synthesize_corpus
 from evalsuite.motion.bvh_writer import write_bvh
+from evalsuite.synth import Layout, MotionParams, read_synth_corpus, segment_oracle, synthesize_corpus
 
 
 def build_corpus(root: pathlib.Path, minutes: float = 1.0, seed: int = 0, segment_s: float = 10.0) -> pathlib.Path:

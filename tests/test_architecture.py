@@ -13,8 +13,9 @@ LAYERS = [
     {"evalsuite._version", "evalsuite.errors", "evalsuite.hashing", "evalsuite.audio", "evalsuite.parallel",
      "evalsuite.contracts"},
     {"evalsuite.motion"},
-    {"evalsuite.metrics", "evalsuite.features", "evalsuite.corpus"},
-    {"evalsuite.learned", "evalsuite.analysis", "renderers"},
+    {"evalsuite.corpus"},
+    {"evalsuite.metrics", "evalsuite.features"},
+    {"evalsuite.synth", "evalsuite.learned", "evalsuite.analysis", "renderers"},
     {"evalsuite.generators", "study_app"},
     {"evalsuite.cli", "evalsuite.demo", "evalsuite.pipeline", "evalsuite.score_command", "evalsuite.validity",
      "evalsuite.__main__", "evalsuite"},
@@ -138,6 +139,15 @@ def test_the_metrics_package_imports_nothing_from_learned():
     graph = import_graph()
     assert sorted(t for m, deps in graph.items() if m.startswith("evalsuite.metrics")
                   for t in deps if t.startswith("evalsuite.learned")) == []
+
+
+def test_corpora_are_read_without_metrics_and_the_synthetic_speaker_is_not_a_reader():
+    """Reading a corpus needs no metric, and no reader depends on the synthetic speaker that writes corpora: the
+    corpus package sits below metrics and features, the speaker above them (it measures its own speech)."""
+    graph = import_graph()
+    upward = sorted(f"{m} -> {t}" for m, deps in graph.items() if m.startswith("evalsuite.corpus")
+                    for t in deps if t.startswith(("evalsuite.metrics", "evalsuite.features", "evalsuite.synth")))
+    assert upward == []
 
 
 def test_no_module_is_a_god_file():

@@ -155,7 +155,6 @@ def test_retrieval_decoding_is_flagged_and_seeded(trained):
 @pytest.mark.slow
 def test_the_four_learning_criteria_hold_with_the_defaults_on_a_15_minute_corpus(tmp_path):
     from evalsuite.corpus import load_corpus
-    from evalsuite.corpus.synth.corpus import synthesize_corpus
     from evalsuite.generators import criteria as C
     from evalsuite.generators.evaluation import evaluate_condition, segment_scores
     from evalsuite.generators.gesture2vec.plugin import Gesture2Vec
@@ -163,6 +162,7 @@ def test_the_four_learning_criteria_hold_with_the_defaults_on_a_15_minute_corpus
     from evalsuite.generators.requests import requests_from_corpus
     from evalsuite.generators.runner import generate
     from evalsuite.generators.training import train
+    from evalsuite.synth.corpus import synthesize_corpus
 
     synthesize_corpus(tmp_path / "corpus", 15.0, 3, jobs=2, progress=False)
     corpus = load_corpus(tmp_path / "corpus")

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from evalsuite.corpus import load_corpus
-from evalsuite.corpus.synth.corpus import synthesize_corpus
 from evalsuite.errors import InputError
 from evalsuite.generators import find_generator
 from evalsuite.generators.evaluation import (
@@ -23,6 +22,7 @@ from evalsuite.generators.evaluation import (
 from evalsuite.generators.requests import requests_from_corpus
 from evalsuite.generators.runner import generate
 from evalsuite.generators.training import train
+from evalsuite.synth.corpus import synthesize_corpus
 
 pytestmark = pytest.mark.slow
 

@@ -7,11 +7,11 @@ from click.testing import CliRunner
 
 from evalsuite.cli import main
 from evalsuite.corpus import load_corpus
-from evalsuite.corpus.synth.corpus import synthesize_corpus
 from evalsuite.generators import GeneratorError, find_generator
 from evalsuite.generators.requests import requests_from_corpus
 from evalsuite.generators.runner import generate
 from evalsuite.motion.io import load_motion
+from evalsuite.synth.corpus import synthesize_corpus
 
 
 @pytest.fixture(scope="module")

@@ -27,12 +27,12 @@ import json
 import pytest
 
 from evalsuite.corpus import load_corpus
-from evalsuite.corpus.synth.corpus import synthesize_corpus
 from evalsuite.generators import find_generator
 from evalsuite.generators.evaluation import evaluate_condition, swapped_audio
 from evalsuite.generators.requests import requests_from_corpus
 from evalsuite.generators.runner import generate
 from evalsuite.generators.training import train
+from evalsuite.synth.corpus import synthesize_corpus
 
 pytestmark = pytest.mark.slow
 

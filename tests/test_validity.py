@@ -25,7 +25,7 @@ HISTOGRAM_BOUND = 0.02      # H: the largest change of a pooled histogram metric
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     """One run of the command on a 1.5-minute corpus of 10 s segments (9 segments, all scored)."""
-    from evalsuite.corpus.synth import Layout, synthesize_corpus
+    from evalsuite.synth import Layout, synthesize_corpus
 
     root = tmp_path_factory.mktemp("validity")
     synthesize_corpus(root / "corpus", 1.5, 11, layout=Layout(segment_s=10.0), progress=False)

@@ -2,7 +2,7 @@
 
 The data model is in :mod:`evalsuite.corpus.types`; transcript formats in
 :mod:`evalsuite.corpus.transcripts`, layout readers in :mod:`evalsuite.corpus.readers`, seeded splits in
-:mod:`evalsuite.corpus.splits`; the synthetic speaker is beside them.
+:mod:`evalsuite.corpus.splits`. The synthetic speaker, which writes corpora, is :mod:`evalsuite.synth`.
 """
 from __future__ import annotations
 

@@ -23,7 +23,7 @@ from evalsuite.corpus.types import SPLITS, Corpus
 from evalsuite.errors import InputError
 
 # Lazily imported subcommands: name -> "module:attribute" (a click command).
-SUBCOMMANDS: dict[str, str] = {"synth": "evalsuite.corpus.synth_cli:synth"}
+SUBCOMMANDS: dict[str, str] = {"synth": "evalsuite.synth.cli:synth"}
 
 
 def _exists(module: str) -> bool:

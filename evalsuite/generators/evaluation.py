@@ -106,7 +106,7 @@ def _write_means(corpus: Corpus, folder: str | pathlib.Path, k: int, fps: float 
                  mean_of: Callable[[Corpus, int, Segment], Motion]) -> pathlib.Path:
     """``mean_of(corpus, i, segment)`` for each segment of the split, resampled to ``fps`` and back when given,
     into ``folder`` (``<segment>.npz``): the synthetic speaker's reference motions below."""
-    from evalsuite.corpus.synth.layout import read_meta
+    from evalsuite.synth.layout import read_meta
 
     if k < 1:
         raise InputError(f"k must be at least 1, got {k}")
@@ -131,8 +131,8 @@ def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k:
 
     The estimate of the conditional mean of the pose given the speech: what a deterministic model trained on the
     pose error converges to at best, so the reference for what such a model can reach on the other criteria
-    (``evalsuite.corpus.synth``; ``benchmarks/bench_speaker_chance.py`` measures its pose error)."""
-    from evalsuite.corpus.synth.oracle import segment_oracle
+    (``evalsuite.synth``; ``benchmarks/bench_speaker_chance.py`` measures its pose error)."""
+    from evalsuite.synth.oracle import segment_oracle
 
     def mean_of(corpus: Corpus, _: int, seg: Segment) -> Motion:
         performances = [segment_oracle(corpus, seg.id, seed=first_seed + i)[0] for i in range(k)]
@@ -146,7 +146,7 @@ def conditional_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k:
 def causal_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k: int = 64, fps: float | None = None,
                              split: str = "test", heard_after: float = 0.0, seed: int = 0) -> pathlib.Path:
     """Write, per segment of a synthetic-speaker corpus, the estimated mean motion given only the speech heard so
-    far (:func:`evalsuite.corpus.synth.oracle.causal_mean_positions`: per frame, the mean of ``k`` performances in
+    far (:func:`evalsuite.synth.oracle.causal_mean_positions`: per frame, the mean of ``k`` performances in
     which the words not yet begun, ``heard_after`` s after their start, are drawn at random from the training
     transcripts; segment i's draws seeded ``seed + i``) into ``folder`` (``<segment>.npz``), resampled to ``fps``
     and back when given.
@@ -154,7 +154,7 @@ def causal_mean_through_rate(corpus: Corpus, folder: str | pathlib.Path, k: int 
     The counterpart of :func:`conditional_mean_through_rate` for causal models (Aud2Motion's forward GRU), an
     estimate of what a deterministic model that hears the speech only up to the frame it outputs can reach; not a
     strict bound (it is told when the coming words start, and does not know the grammar, which a model can learn)."""
-    from evalsuite.corpus.synth.oracle import causal_mean_positions
+    from evalsuite.synth.oracle import causal_mean_positions
 
     return _write_means(corpus, folder, k, fps, split,
                         lambda corpus, i, seg: causal_mean_positions(corpus, seg.id, k, heard_after, seed=seed + i))

@@ -182,7 +182,7 @@ class LexicalClass:
     feature: str
 
 
-# The synthetic speaker's keyword classes (evalsuite.corpus.synth.grammar.KEYWORD_CLASSES) and what its
+# The synthetic speaker's keyword classes (evalsuite.synth.grammar.KEYWORD_CLASSES) and what its
 # semantic gestures change.
 SYNTH_CLASSES: dict[str, LexicalClass] = {
     "up": LexicalClass(("up", "high", "above", "higher", "top"), "wrist_height"),

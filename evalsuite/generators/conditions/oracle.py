@@ -43,7 +43,7 @@ class Oracle(Generator):
     def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
         super().load(config, model_dir)
         from evalsuite.corpus import load_corpus
-        from evalsuite.corpus.synth.params import MotionParams
+        from evalsuite.synth.params import MotionParams
 
         root = self.option("corpus")
         if not root:
@@ -64,7 +64,7 @@ class Oracle(Generator):
         self.params = MotionParams.from_dict(model["params"]).replace(**changes)
 
     def generate(self, request: GenerationRequest) -> GenerationResult:
-        from evalsuite.corpus.synth.oracle import segment_oracle
+        from evalsuite.synth.oracle import segment_oracle
 
         seed = None if self.bool_option("same_seed", False) else request.seed
         try:

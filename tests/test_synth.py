@@ -15,7 +15,10 @@ from click.testing import CliRunner
 
 from evalsuite.audio import read_wav
 from evalsuite.cli import main
-from evalsuite.corpus.synth import (
+from evalsuite.motion.bvh_writer import format_bvh
+from evalsuite.motion.io import load_motion
+from evalsuite.motion.presets import resolve_joints
+from evalsuite.synth import (
     KINDS,
     PHASES,
     Layout,
@@ -26,10 +29,7 @@ from evalsuite.corpus.synth import (
     segment_oracle,
     synthesize_corpus,
 )
-from evalsuite.corpus.synth.speech import Voice, trim_silence
-from evalsuite.motion.bvh_writer import format_bvh
-from evalsuite.motion.io import load_motion
-from evalsuite.motion.presets import resolve_joints
+from evalsuite.synth.speech import Voice, trim_silence
 
 # espeak-ng is required (scripts/install-system-packages installs it); without it the synthesiser raises a
 # clear InputError, so these tests fail instead of hiding a missing install step.
@@ -231,9 +231,9 @@ def test_ten_minutes_in_under_a_minute(tmp_path):
 
 
 def test_rebound_batons_go_out_and_back_within_each_syllable_and_old_corpora_keep_alternate():
-    from evalsuite.corpus.synth.body import channel_index
-    from evalsuite.corpus.synth.model import oracle_motion
     from evalsuite.corpus.types import Transcript, Word
+    from evalsuite.synth.body import channel_index
+    from evalsuite.synth.model import oracle_motion
 
     # one word of two syllables, cut at 0.25 s: no gesture unit (not emphasised, not a keyword)
     transcript = Transcript([Word("garden", 0.5, 1.0)])

@@ -8,13 +8,13 @@ model whose speech-gesture coupling is known (docs/corpus.md § The synthetic sp
 """
 from __future__ import annotations
 
-from evalsuite.corpus.synth.corpus import Layout, synthesize_corpus
-from evalsuite.corpus.synth.grammar import KEYWORD_CLASSES, keyword_class
-from evalsuite.corpus.synth.layout import read_synth_corpus
-from evalsuite.corpus.synth.model import FrameLabels, oracle_motion
-from evalsuite.corpus.synth.oracle import emphasis_from_audio, segment_oracle
-from evalsuite.corpus.synth.params import KINDS, PHASES, MotionParams
-from evalsuite.corpus.synth.speech import Voice
+from evalsuite.synth.corpus import Layout, synthesize_corpus
+from evalsuite.synth.grammar import KEYWORD_CLASSES, keyword_class
+from evalsuite.synth.layout import read_synth_corpus
+from evalsuite.synth.model import FrameLabels, oracle_motion
+from evalsuite.synth.oracle import emphasis_from_audio, segment_oracle
+from evalsuite.synth.params import KINDS, PHASES, MotionParams
+from evalsuite.synth.speech import Voice
 
 __all__ = ["synthesize_corpus", "oracle_motion", "segment_oracle", "emphasis_from_audio", "read_synth_corpus",
            "MotionParams", "Layout", "Voice", "FrameLabels", "KEYWORD_CLASSES", "keyword_class", "PHASES", "KINDS"]

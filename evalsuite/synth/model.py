@@ -30,11 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evalsuite.corpus.synth.body import ARM_CHANNELS, Track, arm_pose, channel_index, upper_body_skeleton
-from evalsuite.corpus.synth.grammar import keyword_class
-from evalsuite.corpus.synth.params import MotionParams
 from evalsuite.corpus.types import Transcript
 from evalsuite.motion.motion import Motion
+from evalsuite.synth.body import ARM_CHANNELS, Track, arm_pose, channel_index, upper_body_skeleton
+from evalsuite.synth.grammar import keyword_class
+from evalsuite.synth.params import MotionParams
 
 __all__ = ["Unit", "FrameLabels", "plan_gestures", "oracle_motion", "syllable_onsets"]
 

@@ -28,7 +28,7 @@ def synth(out_dir: pathlib.Path, minutes: float, seed: int, segment_seconds: flo
 
     Example: evalsuite corpus synth -o corpus/ --minutes 10 --seed 0
     """
-    from evalsuite.corpus.synth import Layout, synthesize_corpus
+    from evalsuite.synth import Layout, synthesize_corpus
 
     t0 = time.perf_counter()
     meta = synthesize_corpus(out_dir, minutes, seed, layout=Layout(segment_s=segment_seconds), speaker=speaker,

@@ -4,7 +4,7 @@ Per segment (about ``segment_s`` seconds of several sentences): sentences from t
 the whole corpus, so splits share no sentence), emphasis flags, espeak-ng speech laid out word by word
 (gaps of ``word_gap_s`` between words, ``phrase_pause_s`` at commas, ``sentence_pause_s`` between
 sentences and now and then a ``long_pause_s`` in which the speaker returns to rest), and the motion
-model's performance of it (:func:`evalsuite.corpus.synth.model.oracle_motion` with the segment's own
+model's performance of it (:func:`evalsuite.synth.model.oracle_motion` with the segment's own
 motion seed). Everything is seeded: one seed gives byte-identical files on one machine.
 """
 from __future__ import annotations
@@ -17,14 +17,14 @@ from typing import Any
 import numpy as np
 
 from evalsuite.audio import write_wav
-from evalsuite.corpus.synth.grammar import KEYWORD_CLASSES, LEXICON, choose_emphasis, make_sentence
-from evalsuite.corpus.synth.layout import FORMAT, FORMAT_VERSION, SPLIT_DIRS, format_tsv, segment_paths
-from evalsuite.corpus.synth.model import oracle_motion
-from evalsuite.corpus.synth.params import KINDS, PHASES, MotionParams
-from evalsuite.corpus.synth.speech import Voice, WordBank, espeak_version
 from evalsuite.corpus.types import Transcript, Word
 from evalsuite.errors import InputError
 from evalsuite.motion.bvh_writer import format_bvh
+from evalsuite.synth.grammar import KEYWORD_CLASSES, LEXICON, choose_emphasis, make_sentence
+from evalsuite.synth.layout import FORMAT, FORMAT_VERSION, SPLIT_DIRS, format_tsv, segment_paths
+from evalsuite.synth.model import oracle_motion
+from evalsuite.synth.params import KINDS, PHASES, MotionParams
+from evalsuite.synth.speech import Voice, WordBank, espeak_version
 
 __all__ = ["Layout", "synthesize_corpus", "assign_splits"]
 
@@ -143,7 +143,7 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
         "format": FORMAT, "format_version": FORMAT_VERSION, "seed": int(seed), "minutes": float(minutes),
         "speaker": speaker, "fps": params.fps, "sample_rate": bank.rate, "espeak_ng": espeak_version(),
         "voice": asdict(voice), "layout": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(layout).items()},
-        "model": {"name": "evalsuite.corpus.synth.model", "version": 1, "params": params.to_dict(),
+        "model": {"name": "evalsuite.synth.model", "version": 1, "params": params.to_dict(),
                   "phases": list(PHASES), "kinds": list(KINDS)},
         "keyword_classes": {c: list(ws) for c, ws in KEYWORD_CLASSES.items()},
         "lexicon": {k: list(v) for k, v in LEXICON.items()},

@@ -15,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from evalsuite.corpus.synth.layout import read_meta, read_synth_corpus
-from evalsuite.corpus.synth.model import FrameLabels, oracle_motion
-from evalsuite.corpus.synth.params import MotionParams
 from evalsuite.corpus.types import Corpus, Transcript
 from evalsuite.motion.motion import Motion
+from evalsuite.synth.layout import read_meta, read_synth_corpus
+from evalsuite.synth.model import FrameLabels, oracle_motion
+from evalsuite.synth.params import MotionParams
 
 __all__ = ["segment_oracle", "causal_mean_positions", "emphasis_from_audio"]
 
