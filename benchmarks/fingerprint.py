@@ -27,7 +27,7 @@ from evalsuite.synth.corpus import synthesize_corpus
 
 # Fixed-epoch configurations, as the reproducibility tests use them.
 TRAINED = {
-    "gesticulator": {"epochs": 3, "words": "hash"},
+    "gesticulator": {"epochs": 5, "words": "hash"},
     "aud2repr2pose": {"epochs": 3, "dae_epochs": 2},
     "aud2motion": {"epochs": 3},
     "aud2pose": {"epochs": 3},

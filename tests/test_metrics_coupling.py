@@ -2,6 +2,8 @@
 synthetic-speaker corpus: the oracle against mean pose and mismatched natural motion, and time offsets."""
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -11,9 +13,10 @@ from scipy.spatial.transform import Rotation
 
 from evalsuite.errors import InputError
 from evalsuite.metrics.coupling import (
-    SYNTH_CLASSES,
+    CLASS_FEATURES,
     energy_speed_correlation,
     joint_speed,
+    lexical_classes,
     lexical_contrast,
     lexical_contrasts,
     motion_feature,
@@ -21,6 +24,7 @@ from evalsuite.metrics.coupling import (
     speech_energy,
 )
 from evalsuite.metrics.planning import resolve_metrics
+from evalsuite.synth.grammar import KEYWORD_CLASSES
 
 
 def test_speech_energy_is_the_frame_rms_then_smoothed():
@@ -108,10 +112,26 @@ def test_lexical_contrasts_per_class():
     names, pos = _body(100)
     pos[22:32, 3, 1] = 180.0                         # hand up 0.2 .. 1.2 s after "above" (the window)
     words = [("the", 1.0), ("Above", 2.0), ("house", 3.0)]
-    out = lexical_contrasts(words, pos, names, 10.0)
-    assert set(out) == set(SYNTH_CLASSES)
+    out = lexical_contrasts(words, pos, names, 10.0, lexical_classes(KEYWORD_CLASSES))
+    assert set(out) == set(CLASS_FEATURES)
     assert out["up"] == pytest.approx(80.0 * (1.0 - 10 / 100))
     assert np.isnan(out["wide"]) and np.isnan(out["negation"])
+
+
+def test_keyword_classes_come_from_the_corpus_not_a_copy(tmp_path):
+    from synth_helpers import build_corpus
+
+    from evalsuite.corpus import load_corpus
+
+    root = build_corpus(tmp_path / "corpus", minutes=0.5, seed=0)
+    meta = json.loads((root / "corpus.json").read_text())
+    meta["keyword_classes"] = {"up": ["lofty"], "point": ["yonder"], "unknown_class": ["x"]}
+    (root / "corpus.json").write_text(json.dumps(meta))
+    seg = load_corpus(root).segments[0]
+    classes = lexical_classes(seg.meta["keyword_classes"])
+    assert {c: spec.words for c, spec in classes.items()} == {"up": ("lofty",), "point": ("yonder",)}
+    assert classes["up"].feature == "wrist_height"
+    assert lexical_classes(None) == {}      # a corpus without keyword classes: no lexical contrast
 
 
 def test_phase_statistics_of_known_labels():
@@ -157,7 +177,7 @@ def test_oracle_beats_mean_pose_and_mismatched_motion(scored):
     assert v.loc["energy_speed_r", "oracle"] >= v.loc["energy_speed_r", "mismatched"] + 0.25
     assert v.loc["energy_speed_r", "mean_pose"] == 0.0
     # lexical contrast, every keyword class (measured: oracle 13-45, mismatched within +-12.4, mean pose 0)
-    for cls in SYNTH_CLASSES:
+    for cls in CLASS_FEATURES:
         m = f"lexical_contrast_{cls}"
         assert v.loc[m, "oracle"] > max(10.0, 3 * abs(v.loc[m, "mismatched"])), cls
         assert abs(v.loc[m, "mean_pose"]) < 1e-6

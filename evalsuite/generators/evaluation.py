@@ -23,9 +23,9 @@ import numpy as np
 from evalsuite.corpus.types import Corpus, Segment
 from evalsuite.errors import InputError
 from evalsuite.metrics.coupling import (
-    SYNTH_CLASSES,
     energy_speed_correlation,
     joint_speed,
+    lexical_classes,
     lexical_contrasts,
     speech_energy,
     wrist_indices,
@@ -60,12 +60,13 @@ def segment_scores(gen: Motion, seg: Segment) -> dict[str, float]:
         energy = speech_energy(x.mean(axis=1), rate, gen.fps, gen.n_frames)
         speed = joint_speed(pos[:, wrist_indices(gen.joint_names)], gen.fps)
         out["energy_speed_r"] = energy_speed_correlation(energy, speed, gen.fps, 0.3)[0]
-    if seg.transcript is not None:
+    classes = lexical_classes(seg.meta.get("keyword_classes"))
+    if seg.transcript is not None and classes:
         head = None
         if gen.is_hierarchical and "Head" in gen.joint_names:
             head = gen.world_rotations()[:, gen.joint_index("Head")]
         words = [(w.text, w.start) for w in seg.transcript.words]
-        for cls, value in lexical_contrasts(words, pos, gen.joint_names, gen.fps, SYNTH_CLASSES,
+        for cls, value in lexical_contrasts(words, pos, gen.joint_names, gen.fps, classes,
                                             head_rotations=head).items():
             out[f"lexical_{cls}"] = value
     return out

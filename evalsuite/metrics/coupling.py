@@ -3,8 +3,8 @@
 * :func:`speech_energy`: RMS energy of the speech on the motion's frame grid, smoothed;
 * :func:`energy_speed_correlation`: Pearson correlation of speech energy with (wrist) speed over lags;
 * :func:`lexical_contrast`: change of a motion feature in a window after given words against the
-  sequence's baseline; :func:`motion_feature` computes the features, :data:`SYNTH_CLASSES` is the
-  synthetic speaker's keyword classes as a preset, :func:`lexical_contrasts` all classes at once;
+  sequence's baseline; :func:`motion_feature` computes the features, :func:`lexical_classes` pairs a
+  corpus's keyword classes with the feature each moves, :func:`lexical_contrasts` all classes at once;
 * :func:`phase_statistics`: proportions, mean durations and the transition matrix of per-frame gesture
   phase labels.
 
@@ -25,8 +25,8 @@ from evalsuite.errors import InputError
 from evalsuite.metrics._validate import positions_array, positive
 
 __all__ = ["speech_energy", "joint_speed", "energy_speed_correlation", "lexical_contrast", "motion_feature",
-           "lexical_contrasts", "word_onsets", "phase_statistics", "PhaseStatistics", "SYNTH_CLASSES",
-           "LEXICAL_FEATURES", "LexicalClass", "wrist_indices", "read_phase_labels"]
+           "lexical_contrasts", "word_onsets", "phase_statistics", "PhaseStatistics", "CLASS_FEATURES",
+           "lexical_classes", "LEXICAL_FEATURES", "LexicalClass", "wrist_indices", "read_phase_labels"]
 
 WRISTS = (("RightHand", "LeftHand"), ("b_r_wrist", "b_l_wrist"), ("RightWrist", "LeftWrist"))
 CHEST = ("Spine3", "b_spine3", "Spine2", "b_spine2", "Chest", "Spine1")
@@ -182,15 +182,26 @@ class LexicalClass:
     feature: str
 
 
-# The synthetic speaker's keyword classes (evalsuite.synth.grammar.KEYWORD_CLASSES) and what its
-# semantic gestures change.
-SYNTH_CLASSES: dict[str, LexicalClass] = {
-    "up": LexicalClass(("up", "high", "above", "higher", "top"), "wrist_height"),
-    "wide": LexicalClass(("big", "all", "everything", "huge", "whole"), "hand_distance"),
-    "self": LexicalClass(("i", "me", "my", "myself", "mine"), "hand_chest"),
-    "point": LexicalClass(("you", "there", "your", "yours", "yonder"), "hand_forward"),
-    "negation": LexicalClass(("no", "not", "never", "nothing", "nobody"), "head_yaw_speed"),
+# The motion feature each keyword class's semantic gesture moves (the synthetic speaker's classes,
+# evalsuite.synth.model). The words of each class are the corpus's own (corpus.json's ``keyword_classes``, kept by
+# the reader in each segment's ``meta``): :func:`lexical_classes` pairs the two.
+CLASS_FEATURES: dict[str, str] = {
+    "up": "wrist_height",
+    "wide": "hand_distance",
+    "self": "hand_chest",
+    "point": "hand_forward",
+    "negation": "head_yaw_speed",
 }
+
+
+def lexical_classes(keyword_classes: Mapping[str, Sequence[str]] | None) -> dict[str, LexicalClass]:
+    """``{class: LexicalClass(words, feature)}`` for a corpus's ``keyword_classes`` (class -> words, as
+    corpus.json stores them) whose class has a feature in :data:`CLASS_FEATURES`; ``{}`` for a corpus without
+    keyword classes (lexical contrast is then not measured)."""
+    if not keyword_classes:
+        return {}
+    return {c: LexicalClass(tuple(str(w).lower() for w in words), CLASS_FEATURES[c])
+            for c, words in keyword_classes.items() if c in CLASS_FEATURES}
 
 
 def word_onsets(words: Sequence[tuple[str, float]], vocabulary: Sequence[str]) -> np.ndarray:
@@ -200,14 +211,14 @@ def word_onsets(words: Sequence[tuple[str, float]], vocabulary: Sequence[str]) -
 
 
 def lexical_contrasts(words: Sequence[tuple[str, float]], positions: npt.ArrayLike, joint_names: Sequence[str],
-                      fps: float, classes: Mapping[str, LexicalClass] | None = None,
+                      fps: float, classes: Mapping[str, LexicalClass],
                       window: tuple[float, float] = (0.2, 1.2),
                       head_rotations: npt.ArrayLike | None = None) -> dict[str, float]:
     """:func:`lexical_contrast` of each class's feature after its words (``(text, start)`` pairs); NaN for a
     class with no word in the sequence."""
     out: dict[str, float] = {}
     cache: dict[str, np.ndarray] = {}
-    for cls, spec in (classes or SYNTH_CLASSES).items():
+    for cls, spec in classes.items():
         onsets = word_onsets(words, spec.words)
         if onsets.size == 0:
             out[cls] = float("nan")

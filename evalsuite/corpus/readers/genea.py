@@ -214,3 +214,7 @@ def read_genea2023(root: pathlib.Path, b: CorpusBuilder) -> None:
         b.meta["corpus_json"] = content
         for k, v in content.items():
             b.meta.setdefault(k, v)
+        # Each segment carries its corpus's keyword classes, which the lexical-contrast metrics score it by.
+        if isinstance(content.get("keyword_classes"), dict):
+            for seg in b.segments:
+                seg.meta["keyword_classes"] = content["keyword_classes"]

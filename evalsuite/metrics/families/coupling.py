@@ -2,7 +2,8 @@
 
 Each condition's file is matched to the corpus segment of the same name (stem = segment id), whose speech
 and transcript it is scored against: the correlation of speech energy with wrist speed (best lag within
-+-0.3 s), lexical contrast of the synthetic speaker's keyword classes (:data:`SYNTH_CLASSES`), and, where a
++-0.3 s), lexical contrast of the corpus's keyword classes (corpus.json's ``keyword_classes``, as the synthetic speaker
+writes them; each class's feature from :data:`CLASS_FEATURES`; not measured where the corpus has none), and, where a
 per-frame label file exists for the file (``labels/<stem>.csv`` beside or one folder above the motion's
 folder, as the synthetic corpus writes them), phase-structure statistics.
 """
@@ -14,9 +15,10 @@ import numpy as np
 
 from evalsuite.errors import InputError
 from evalsuite.metrics.coupling import (
-    SYNTH_CLASSES,
+    CLASS_FEATURES,
     energy_speed_correlation,
     joint_speed,
+    lexical_classes,
     lexical_contrasts,
     phase_statistics,
     read_phase_labels,
@@ -50,9 +52,9 @@ class CouplingFamily(MetricFamily):
         MetricInfo("energy_speed_r", "r", "higher",
                    description=f"best correlation of speech energy and wrist speed, lags within +-{MAX_LAG_S:g} s"),
         MetricInfo("energy_speed_lag", "s", "closer to natural", description="lag of the best correlation"),
-        *(MetricInfo(f"lexical_contrast_{c}", "deg/s" if spec.feature == "head_yaw_speed" else "units", "higher",
-                     description=f"{spec.feature} after {c!r} words minus its sequence mean")
-          for c, spec in SYNTH_CLASSES.items()),
+        *(MetricInfo(f"lexical_contrast_{c}", "deg/s" if feature == "head_yaw_speed" else "units", "higher",
+                     description=f"{feature} after the corpus's {c!r} keywords minus its sequence mean")
+          for c, feature in CLASS_FEATURES.items()),
         *(MetricInfo(m, "s" if what == "duration" else "fraction", "closer to natural",
                      description=f"{what} of {phase} frames (from a per-frame label file)")
           for m, (phase, what) in PHASE_METRICS.items()),
@@ -77,13 +79,14 @@ class CouplingFamily(MetricFamily):
             return
         r, lag, _ = energy_speed_correlation(energy, speed, fps, MAX_LAG_S)
         ctx.record["energy_speed_r"], ctx.record["energy_speed_lag"] = r, lag
-        if seg.transcript is not None:
+        classes = lexical_classes(seg.meta.get("keyword_classes"))
+        if seg.transcript is not None and classes:
             rot = None
             if motion.is_hierarchical and "Head" in names:
                 rot = motion.world_rotations()[:, names.index("Head")]
             words = [(w.text, w.start) for w in seg.transcript.words]
             try:
-                for c, v in lexical_contrasts(words, pos, names, fps, SYNTH_CLASSES, head_rotations=rot).items():
+                for c, v in lexical_contrasts(words, pos, names, fps, classes, head_rotations=rot).items():
                     ctx.record[f"lexical_contrast_{c}"] = v
             except InputError as exc:
                 ctx.record.setdefault("warnings", []).append(f"lexical contrast: {exc}")
