@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 import evalsuite
@@ -58,6 +59,63 @@ def test_convert_bvh_to_bvh_and_positions_to_bvh_refused(tmp_path):
     assert "holds positions only and cannot be written as BVH" in res.output
     assert "Traceback" not in res.output
     assert not (tmp_path / "x.bvh").exists()
+
+
+@pytest.mark.parametrize("src_ext, dst_ext", [(".bvh", ".bvh"), (".bvh", ".npz"), (".npz", ".csv"), (".csv", ".npy"),
+                                              (".npy", ".npz")])
+def test_convert_start_end_cuts_every_format_by_seconds(tmp_path, src_ext, dst_ext):
+    walk = evalsuite.load_motion(sample_path("walk01"))  # 101 frames @ 24 fps
+    src = tmp_path / f"in{src_ext}"
+    if src_ext == ".bvh":
+        src = sample_path("walk01")
+    else:
+        evalsuite.save_motion(walk, src)
+    out = tmp_path / f"out{dst_ext}"
+    extra = ["--input-fps", "24"] if src_ext == ".npy" else []
+    res = run("convert", src, out, "--start", "1", "--end", "2.5", *extra)
+    assert res.exit_code == 0, res.output
+    assert "36 frames @ 24 fps" in res.output
+    cut = evalsuite.load_motion(out, fps=24.0 if dst_ext == ".npy" else None, joint_names=walk.joint_names
+                                if dst_ext == ".npy" else None)
+    assert cut.n_frames == 36  # frames round(1 * 24) = 24 up to, not including, round(2.5 * 24) = 60
+    np.testing.assert_allclose(cut.positions(), walk.positions()[24:60], atol=1e-4)
+    if dst_ext == ".bvh":
+        np.testing.assert_allclose(cut.values, walk.values[24:60], atol=1e-4)
+
+
+def test_convert_start_or_end_alone_and_the_cut_comes_before_resampling(tmp_path):
+    walk = evalsuite.load_motion(sample_path("walk01"))
+    assert run("convert", sample_path("walk01"), tmp_path / "a.npz", "--start", "3.5").exit_code == 0
+    with np.load(tmp_path / "a.npz") as data:
+        np.testing.assert_allclose(data["positions"], walk.positions()[84:], atol=1e-9)
+    assert run("convert", sample_path("walk01"), tmp_path / "b.npz", "--end", "0.5").exit_code == 0
+    with np.load(tmp_path / "b.npz") as data:
+        assert data["positions"].shape[0] == 12
+    # seconds are the input's: at 24 fps frame 24 (1 s) is kept, then every second frame at 12 fps
+    assert run("convert", sample_path("walk01"), tmp_path / "c.npz", "--start", "1", "--end", "2",
+               "--fps", "12").exit_code == 0
+    with np.load(tmp_path / "c.npz") as data:
+        np.testing.assert_allclose(data["positions"], walk.positions()[24:48:2], atol=1e-6)
+    # the end of the file itself (4.20833 s) and a value rounding to it are within the file
+    assert run("convert", sample_path("walk01"), tmp_path / "d.npz", "--start", "4", "--end", "4.21").exit_code == 0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--start", "2", "--end", "1"], "cut 2 s to 1 s is empty: the end must come after the start"),
+    (["--start", "1", "--end", "1"], "cut 1 s to 1 s is empty"),
+    (["--start", "-1", "--end", "1"], "cut -1 s to 1 s: the start must be 0 s or later"),
+    (["--start", "5"], "cut 5 s to the end starts outside the motion, which lasts 4.20833 s (101 frames @ 24 fps)"),
+    (["--end", "5"], "cut 0 s to 5 s ends outside the motion, which lasts 4.20833 s (101 frames @ 24 fps)"),
+    (["--start", "1", "--end", "1.01"], "cut 1 s to 1.01 s holds no frame at 24 fps"),
+    (["--start", "nan"], "cut nan s to the end: start and end must be finite numbers of seconds"),
+])
+def test_convert_start_end_refuses_bad_cuts_in_one_line(tmp_path, args, message):
+    out = tmp_path / "x.npz"
+    res = CliRunner().invoke(main, ["convert", str(sample_path("walk01")), str(out), *args])
+    assert res.exit_code == 1
+    assert f"Error: {sample_path('walk01')}: {message}" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    assert not out.exists()
 
 
 def test_bad_file_gives_message_without_traceback(tmp_path):

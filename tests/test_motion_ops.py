@@ -126,6 +126,13 @@ def test_cut_by_time(walk):
         ops.cut(walk, 10.0, 11.0)
 
 
+def test_cut_past_the_end_is_clipped_or_refused(walk):
+    assert ops.cut(walk, 4.0, 60.0).n_frames == walk.n_frames - 96  # renderers cut many files to one span
+    with pytest.raises(MotionError, match=r"cut 4 s to 60 s ends outside the motion, which lasts 4.20833 s"):
+        ops.cut(walk, 4.0, 60.0, past_end=False)
+    assert ops.cut(walk, 4.0, 4.21, past_end=False).n_frames == 5  # rounds to the last frame's end
+
+
 @pytest.mark.parametrize("axes", ["xz", "xyz"])
 def test_center_on_root(walk, axes):
     centred = ops.center(walk, axes=axes)

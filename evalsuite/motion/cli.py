@@ -73,6 +73,12 @@ def info(files: tuple[str, ...], fps: float | None, joints_file: str | None, as_
 @click.argument("dst", type=click.Path(dir_okay=False, writable=True))
 @click.option("--joints", help="Keep only these joints: a preset (genea2020_upper, genea2023, ...) or "
                                "comma-separated names.")
+@click.option("--start", type=float, default=None, metavar="SECONDS",
+              help="Keep the motion from this time on (seconds of the input, from its own frame rate; "
+                   "the frame nearest to it is the first kept) [default: 0].")
+@click.option("--end", type=float, default=None, metavar="SECONDS",
+              help="Keep the motion up to this time (seconds of the input; the frame nearest to it is the "
+                   "first dropped). Must be after --start and within the file [default: the end].")
 @click.option("--fps", type=float, help="Resample to this frame rate (slerp for rotations). For .npy input "
                                         "without a stored rate, use --input-fps.")
 @click.option("--input-fps", type=float, help="Frame rate of a positions input that does not store one.")
@@ -84,18 +90,20 @@ def info(files: tuple[str, ...], fps: float | None, joints_file: str | None, as_
               help="Smoothing filter: moving average (5 frames), Savitzky-Golay (9, 3) or One-Euro.")
 @click.option("--end-sites", is_flag=True, help="Include End Sites in positions outputs (as <parent>_End).")
 @_CONVENTION
-def convert(src: str, dst: str, joints: str | None, fps: float | None, input_fps: float | None,
-            joints_file: str | None, center_axes: str | None, smooth: str | None, end_sites: bool,
-            convention: str | None) -> None:
-    """Convert motion between BVH and positions (.npz, .npy, .csv).
+def convert(src: str, dst: str, joints: str | None, start: float | None, end: float | None, fps: float | None,
+            input_fps: float | None, joints_file: str | None, center_axes: str | None, smooth: str | None,
+            end_sites: bool, convention: str | None) -> None:
+    """Convert motion between BVH and positions (.npz, .npy, .csv), optionally cut in time.
 
-    Operations run in this order: select joints, resample, center, smooth.
+    Operations run in this order: cut (--start/--end), select joints, resample, center, smooth.
     A .npz output holds positions (T, J, 3), joint_names, fps and parents.
     """
     from evalsuite.motion import filters, ops
     from evalsuite.motion.io import save_motion
 
     motion = _load(src, input_fps, joints_file, convention)
+    if start is not None or end is not None:
+        motion = ops.cut(motion, 0.0 if start is None else start, end, past_end=False)
     if joints:
         motion = ops.select_joints(motion, joints)
     if fps:

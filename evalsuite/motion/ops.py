@@ -131,13 +131,29 @@ def resample(motion: Motion, fps: float) -> Motion:
     return motion.with_values(out, fps=fps)
 
 
-def cut(motion: Motion, start: float = 0.0, end: float | None = None) -> Motion:
-    """Frames from ``start`` to ``end`` seconds (frame ``round(start*fps)`` up to, not incl., ``round(end*fps)``)."""
+def cut(motion: Motion, start: float = 0.0, end: float | None = None, *, past_end: bool = True) -> Motion:
+    """Frames from ``start`` to ``end`` seconds: frame ``round(start*fps)`` up to, not incl., ``round(end*fps)``.
+
+    ``end=None`` keeps everything after ``start``. With ``past_end=False`` an ``end`` after the
+    last frame (``round(end*fps) > n_frames``, i.e. past ``duration`` by half a frame or more) is an
+    error instead of being clipped to the end of the motion.
+    """
+    where = f"{motion.duration:g} s ({motion.n_frames} frames @ {motion.fps:g} fps)"
+    span = f"cut {start:g} s to {'the end' if end is None else f'{end:g} s'}"
+    if not np.isfinite(start) or (end is not None and not np.isfinite(end)):
+        raise MotionError(f"{span}: start and end must be finite numbers of seconds", path=motion.source)
+    if end is not None and end <= start:
+        raise MotionError(f"{span} is empty: the end must come after the start", path=motion.source)
     first = int(round(start * motion.fps))
     last = motion.n_frames if end is None else int(round(end * motion.fps))
-    if start < 0 or first >= motion.n_frames or last <= first:
-        raise MotionError(f"cut {start:g}-{end if end is not None else 'end'} s is outside the motion "
-                          f"(0-{motion.duration:g} s) or empty", path=motion.source)
+    if start < 0:
+        raise MotionError(f"{span}: the start must be 0 s or later", path=motion.source)
+    if first >= motion.n_frames:
+        raise MotionError(f"{span} starts outside the motion, which lasts {where}", path=motion.source)
+    if last <= first:
+        raise MotionError(f"{span} holds no frame at {motion.fps:g} fps", path=motion.source)
+    if not past_end and last > motion.n_frames:
+        raise MotionError(f"{span} ends outside the motion, which lasts {where}", path=motion.source)
     if motion.is_hierarchical:
         return motion.with_values(motion.values[first:last])
     return motion.with_positions(motion.positions()[first:last])
