@@ -115,11 +115,16 @@ def train(natural_dir, out, joints, window, stride, fps, epochs, seed, batch_siz
 
 @fgd.command("import-genea")
 @click.argument("checkpoint", type=click.Path(exists=True, dir_okay=False, path_type=pathlib.Path))
-@click.option("--stats", "stats", default=None,
-              help="Normalisation vectors: .npz with mean/std, .npy of shape (2, D), or MEAN.npy,STD.npy.")
+@click.option("--stats", "stats", default=None, metavar="PRESET|FILE",
+              help="Normalisation vectors (mean/std of the extractor's input); needed for GENEA checkpoints. A "
+                   "preset shipped with evalsuite (genea2020, genea2022_fullbody, genea2022_upperbody, genea2023: "
+                   "the official numbers) or a file: .npz with mean/std, .npy of shape (2, D), or MEAN.npy,STD.npy. "
+                   "Without it the import stops with an error, except for Yoon et al. checkpoints read with "
+                   "--unsafe-pickle (their args.mean_dir_vec, std 1).")
 @click.option("--joints", required=True,
               help="Joints in the checkpoint's input order: a preset (genea2023) or A,B,C.")
-@click.option("-o", "--out", type=click.Path(dir_okay=False, path_type=pathlib.Path), required=True)
+@click.option("-o", "--out", type=click.Path(dir_okay=False, path_type=pathlib.Path), required=True,
+              help="Model file to write.")
 @click.option("--fps", type=float, default=30.0, show_default=True, help="Frame rate the extractor was trained at.")
 @click.option("--stride", type=int, default=None, help="Window step [default: window // 2].")
 @click.option("--window-rule", type=click.Choice(["genea", "complete"]), default="genea", show_default=True,
@@ -133,7 +138,10 @@ def train(natural_dir, out, joints, window, stride, fps, epochs, seed, batch_siz
               help="Allow pickled objects in the checkpoint (Yoon et al.'s 'args'). Only for trusted files.")
 def import_genea(checkpoint, stats, joints, out, fps, stride, window_rule, convention, representation, bones,
                  unsafe_pickle):
-    """Convert a GENEA (2020/2022/2023) or Yoon et al. FGD checkpoint into an evalsuite model file."""
+    """Convert a GENEA (2020/2022/2023) or Yoon et al. FGD checkpoint into an evalsuite model file.
+
+    Example: evalsuite fgd import-genea model_checkpoint_30.bin --stats genea2023 --joints genea2023 -o genea30.pt
+    """
     from evalsuite.learned.genea import import_checkpoint
 
     bone_list = None

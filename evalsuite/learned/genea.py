@@ -7,13 +7,16 @@ and has no ``n_frames``. The state dict loads by name into :class:`~evalsuite.le
 EmbeddingNet` (the mapping is the identity, see docs/learned.md); the architecture (window,
 channel widths, fc_mu head) is read off the parameter shapes.
 
-The normalisation vectors are not in the checkpoint: GENEA keeps them in its scripts or in
-``*_Mean.npy``/``*_Std.npy`` files. Give them as an ``.npz`` with ``mean`` and ``std``, a
-``.npy`` of shape ``(2, D)``, or ``MEAN.npy,STD.npy``; Yoon et al. use ``mean_dir_vec`` and
-no std (std = 1), taken from the checkpoint's ``args`` when no stats are given.
+The normalisation vectors are not in the checkpoint: GENEA keeps them as literals in its scripts
+(shipped here as presets, :mod:`evalsuite.learned.genea_stats`) or in ``*_Mean.npy``/``*_Std.npy``
+files. Give a preset name (``genea2020``, ``genea2022_fullbody``, ``genea2022_upperbody``,
+``genea2023``), an ``.npz`` with ``mean`` and ``std``, a ``.npy`` of shape ``(2, D)``, or
+``MEAN.npy,STD.npy``; Yoon et al. use ``mean_dir_vec`` and no std (std = 1), taken from the
+checkpoint's ``args`` when no stats are given.
 """
 from __future__ import annotations
 
+import hashlib
 import pathlib
 
 import numpy as np
@@ -21,6 +24,7 @@ import torch
 
 from evalsuite.errors import InputError
 from evalsuite.learned.data import file_sha256
+from evalsuite.learned.genea_stats import NOT_PRESETS, STATS_PRESETS
 from evalsuite.learned.modelfile import FeatureModel, new_meta
 from evalsuite.learned.network import EmbeddingNet, architecture_from_state_dict
 from evalsuite.learned.presets import resolve_joint_spec
@@ -49,9 +53,32 @@ def read_checkpoint(path, allow_pickle: bool = False) -> dict:
                      "'n_frames', or a bare state dict", path=path)
 
 
+def stats_preset(name: str) -> tuple[np.ndarray, np.ndarray, str]:
+    """Mean, std (float64, shape (D,)) and a provenance line of a shipped preset, e.g. ``genea2023``."""
+    if name in NOT_PRESETS:
+        raise InputError(f"--stats {name}: {NOT_PRESETS[name]}")
+    if name not in STATS_PRESETS:
+        raise InputError(f"unknown stats preset {name!r}; expected one of {', '.join(STATS_PRESETS)} or a file")
+    p = STATS_PRESETS[name]
+    mean, std = np.asarray(p["mean"], dtype=np.float64), np.asarray(p["std"], dtype=np.float64)
+    return mean, std, f"preset {name} ({p['what']}; {mean.size} values) from {p['source']}"
+
+
+def stats_sha256(mean: np.ndarray, std: np.ndarray) -> str:
+    """SHA-256 of the vectors themselves (little-endian float64 mean, then std): the same for a preset
+    and for a file holding its numbers."""
+    digest = hashlib.sha256()
+    for vec in (mean, std):
+        digest.update(np.ascontiguousarray(vec, dtype="<f8").tobytes())
+    return digest.hexdigest()
+
+
 def read_stats(spec) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and std vectors from ``.npz`` (mean, std), ``.npy`` (2, D) or ``"MEAN.npy,STD.npy"``."""
+    """Mean and std vectors from a preset name, ``.npz`` (mean, std), ``.npy`` (2, D) or ``"MEAN.npy,STD.npy"``."""
     text = str(spec)
+    if text in STATS_PRESETS or text in NOT_PRESETS:
+        mean, std, _ = stats_preset(text)
+        return mean, std
     if "," in text:
         parts = [pathlib.Path(p.strip()) for p in text.split(",")]
         if len(parts) != 2:
@@ -59,7 +86,7 @@ def read_stats(spec) -> tuple[np.ndarray, np.ndarray]:
         return _load_vector(parts[0]), _load_vector(parts[1])
     path = pathlib.Path(text)
     if not path.is_file():
-        raise InputError("no such stats file", path=path)
+        raise InputError(f"no such stats file, and not a preset ({', '.join(STATS_PRESETS)})", path=path)
     if path.suffix.lower() == ".npz":
         with np.load(path, allow_pickle=False) as data:
             if "mean" not in data.files or "std" not in data.files:
@@ -91,7 +118,8 @@ def import_checkpoint(checkpoint, *, joints, stats=None, fps: float = 30.0, stri
         checkpoint: path of the ``.bin``/``.pt`` checkpoint.
         joints: the joints in the order of the checkpoint's input (preset, ``"A,B,C"``, list);
             ``genea2023`` also sets the PyMO convention.
-        stats: normalisation vectors (see module docstring); required except for Yoon et al.
+        stats: normalisation vectors: a preset name or a file (see module docstring); required except
+            for Yoon et al.
         fps: the frame rate the extractor was trained at (GENEA: 30; Yoon et al./TED: 15).
         stride: window step for scoring (default window // 2, as the GENEA scripts).
         representation: ``positions`` or ``bone_directions`` (with ``bones`` as name pairs;
@@ -143,7 +171,10 @@ def import_checkpoint(checkpoint, *, joints, stats=None, fps: float = 30.0, stri
                          path=path)
 
     stats_source = None
-    if stats is not None:
+    is_preset = stats is not None and (str(stats) in STATS_PRESETS or str(stats) in NOT_PRESETS)
+    if is_preset:
+        mean, std, stats_source = stats_preset(str(stats))
+    elif stats is not None:
         mean, std = read_stats(stats)
         stats_source = str(stats)
     elif representation == "bone_directions" and "args" in ckpt and hasattr(ckpt["args"], "mean_dir_vec"):
@@ -151,11 +182,12 @@ def import_checkpoint(checkpoint, *, joints, stats=None, fps: float = 30.0, stri
         std = np.ones_like(mean)
         stats_source = "checkpoint args.mean_dir_vec (std 1)"
     else:
-        raise InputError("normalisation vectors are needed: --stats MEAN_STD (.npz with mean/std, "
-                         ".npy of shape (2, D) or MEAN.npy,STD.npy)")
+        raise InputError("normalisation vectors are needed: --stats PRESET (" + ", ".join(STATS_PRESETS)
+                         + ") or a file (.npz with mean/std, .npy of shape (2, D) or MEAN.npy,STD.npy)")
     if mean.shape != (arch.pose_dim,) or std.shape != (arch.pose_dim,):
-        raise InputError(f"stats must have {arch.pose_dim} values each, got mean {mean.shape[0]} and std "
-                         f"{std.shape[0]}")
+        what_stats = f"--stats {stats}" if is_preset else "stats"
+        raise InputError(f"{what_stats} must have {arch.pose_dim} values each (the checkpoint's input), got mean "
+                         f"{mean.shape[0]} and std {std.shape[0]}", path=path)
     if not (std > 0).all():
         raise InputError(f"std has {(std <= 0).sum()} non-positive value(s); the reference code would divide by them")
 
@@ -165,8 +197,8 @@ def import_checkpoint(checkpoint, *, joints, stats=None, fps: float = 30.0, stri
         family = "genea2022/2023" if tuple(arch.conv_channels) == (128, 64) else "genea2020"
     provenance = {"kind": "imported", "source_format": family, "checkpoint_file": path.name,
                   "checkpoint_sha256": file_sha256(path), "stats": stats_source,
-                  "stats_sha256": None if stats is None or "," in str(stats) else file_sha256(stats)}
-    normalization = {"source": stats_source}
+                  "stats_sha256": None if stats is None or is_preset or "," in str(stats) else file_sha256(stats)}
+    normalization = {"source": stats_source, "values_sha256": stats_sha256(mean, std)}
     stride = int(stride or max(arch.window // 2, 1))
     meta = new_meta(arch, rep, fps, stride, window_rule, normalization, provenance, None)
     return FeatureModel(net, meta, mean, std)
