@@ -1,4 +1,4 @@
-"""Speech audio for videos: read (WAV or anything ffmpeg decodes), write WAV, trim, synthesise.
+"""Speech audio for videos: read (WAV or anything ffmpeg decodes), write WAV, cut, trim, synthesise.
 
 Samples are float32 in [-1, 1], shape ``(n, channels)``.
 """
@@ -56,6 +56,22 @@ def _probe_audio_rate(path) -> int | None:
 def write_wav(path, samples: np.ndarray, rate: int) -> None:
     """Write 16-bit PCM WAV (:func:`evalsuite.audio.write_wav`)."""
     _write_wav(path, np.clip(np.asarray(samples, dtype=np.float64), -1.0, 1.0), rate)
+
+
+def cut_audio(samples: np.ndarray, rate: int, start: float = 0.0, end: float | None = None,
+              label: str = "") -> np.ndarray:
+    """Samples from ``start`` to ``end`` seconds: sample ``round(start * rate)`` up to ``round(end * rate)``.
+
+    The same window as a motion cut, so speech stays in sync with the cut motion. An ``end``
+    past the audio's end keeps what there is (the caller compares lengths); a ``start`` at or
+    past it is an :class:`InputError`.
+    """
+    first = int(round(start * rate))
+    if start < 0 or first >= len(samples):
+        raise InputError(f"{label + ': ' if label else ''}the cut starts at {start:.3f} s but the audio lasts "
+                         f"{len(samples) / rate:.3f} s", field="start")
+    last = len(samples) if end is None else int(round(end * rate))
+    return samples[first:last]
 
 
 def fit_length(samples: np.ndarray, n_samples: int) -> np.ndarray:

@@ -32,8 +32,13 @@ def _settings_options(fn):
         click.option("--center/--no-center", default=True, show_default=True,
                      help="Move each clip's mean root position to the origin so clips line up."),
         click.option("--crf", type=int, default=20, show_default=True, help="H.264 quality (lower = better)."),
-        click.option("--start", type=float, default=None, help="Start time in seconds."),
-        click.option("--end", type=float, default=None, help="End time in seconds."),
+        click.option("--start", type=float, default=None,
+                     help="Start time in seconds; the speech audio is cut with the motion."),
+        click.option("--end", type=float, default=None,
+                     help="End time in seconds; the speech audio is cut with the motion."),
+        click.option("--drop-joints", default="", metavar="NAMES",
+                     help="Comma-separated joints not to draw nor frame, besides the non-body joints "
+                          "(world root at the floor, zero-length helpers) that are always left out."),
     ]
     for opt in reversed(options):
         fn = opt(fn)
@@ -49,7 +54,7 @@ def _settings(kw):
     return RenderSettings(width=kw.pop("width"), height=kw.pop("height"), view=kw.pop("view"),
                           framing=kw.pop("framing"), fps=kw.pop("fps"), up_axis=kw.pop("up_axis"),
                           msaa=int(kw.pop("msaa")), crf=kw.pop("crf"), center=kw.pop("center"),
-                          style=style)
+                          style=style, drop_joints=kw.pop("drop_joints"))
 
 
 def _echo_warnings(fn):
@@ -82,8 +87,9 @@ def _captions(captions, paths):
 def render():
     """Render motion as stick-figure videos offscreen (no display or GPU needed).
 
-    Videos are H.264 MP4 with the speech audio muxed from frame 0. Conditions shown
-    together share one camera, framed automatically from their motion.
+    Videos are H.264 MP4 with the speech audio muxed in sync: a cut (--start/--end) cuts
+    the audio with the motion. Conditions shown together share one camera, framed
+    automatically from their motion.
     """
 
 
@@ -136,11 +142,14 @@ def video(motion, audio, out, caption, start, end, **kw):
 @render.command()
 @click.argument("motions", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--out", required=True, type=click.Path(dir_okay=False, path_type=pathlib.Path), help="Output .png.")
-@click.option("--frame", type=int, default=None, help="Frame index (default 0).")
-@click.option("--time", "time_s", type=float, default=None, help="Time in seconds (instead of --frame).")
+@click.option("--frame", type=int, default=None,
+              help="Frame index counted from the first frame of the cut (default 0).")
+@click.option("--time", "time_s", type=float, default=None,
+              help="Time in seconds on the motion file's own clock, as --start/--end (instead of --frame).")
 @click.option("--captions", default="", help="Comma-separated caption per motion (default: none).")
-@click.option("--layout", type=click.Choice(["side", "grid"]), default="side", show_default=True)
-@click.option("--cols", type=int, default=None)
+@click.option("--layout", type=click.Choice(["side", "grid"]), default="side", show_default=True,
+              help="One row, or a near-square grid.")
+@click.option("--cols", type=int, default=None, help="Number of columns (overrides --layout).")
 @_settings_options
 def still(motions, out, frame, time_s, captions, layout, cols, start, end, **kw):
     """PNG of one frame of one or more motions (side by side, shared camera)."""
@@ -150,7 +159,11 @@ def still(motions, out, frame, time_s, captions, layout, cols, start, end, **kw)
     ms = prepare_motions(motions, settings, start, end)
     if frame is not None and time_s is not None:
         raise InputError("give --frame or --time, not both")
-    index = int(round(time_s * ms[0].fps)) if time_s is not None else (frame or 0)
+    index = frame or 0
+    if time_s is not None:   # the file's clock, like --start: frame round(t * fps) of the file
+        index = int(round(time_s * ms[0].fps)) - int(round(ms.start * ms[0].fps))
+        if index < 0:
+            raise InputError(f"--time {time_s:g} s is before the cut's start ({ms.start:g} s)", field="--time")
     render_still(ms, out, settings, frame=index, captions=_captions(captions, motions), layout=layout, cols=cols)
     click.echo(f"Wrote {out}")
 

@@ -14,19 +14,36 @@ from tqdm import tqdm
 from evalsuite.errors import InputError
 from evalsuite.motion import Motion, load_motion
 from evalsuite.motion.ops import cut, resample
-from renderers.audio import read_audio
+from renderers.audio import cut_audio, read_audio
 from renderers.figure import FigureMesh
 from renderers.layout import Compositor
 from renderers.scene import FigureRenderer, RenderSettings, View, make_view
+from renderers.skeleton import body_motion
 from renderers.video import VideoWriter, fit_audio
 
 
+class PreparedMotions(list):
+    """The motions :func:`prepare_motions` returns, with the window of the source files they show.
+
+    ``start``: seconds of the source at the first frame (``round(start * fps) / fps``, the
+    frame the cut begins with); ``end``: seconds just after the last frame asked for, or None
+    when the motion runs to its end. :func:`render_video` cuts the speech audio to the same
+    window, so speech and motion stay in sync.
+    """
+
+    start: float = 0.0
+    end: float | None = None
+
+
 def prepare_motions(sources, settings: RenderSettings, start: float | None = None,
-                    end: float | None = None) -> list[Motion]:
+                    end: float | None = None) -> PreparedMotions:
     """Load (paths) or take (Motion objects), cut to ``start``-``end`` s, bring to one fps.
 
     The frame rate is ``settings.fps`` if set, else the first motion's; others are resampled
     to it so the panels stay in step, each with a ``UserWarning`` naming the file and both rates.
+    Joints that are not part of the body (a world root at the floor, zero-length helpers,
+    see :mod:`renderers.skeleton`) and ``settings.drop_joints`` are left out. The result
+    records the cut (``.start``, ``.end``), which :func:`render_video` applies to the audio.
     """
     motions = [s if isinstance(s, Motion) else load_motion(s) for s in sources]
     if not motions:
@@ -40,9 +57,14 @@ def prepare_motions(sources, settings: RenderSettings, start: float | None = Non
     motions = [resample(m, fps) for m in motions]
     if start is not None or end is not None:
         motions = [cut(m, start or 0.0, end) for m in motions]
+    motions = [body_motion(m, settings.up_axis, settings.drop_joints) for m in motions]
     if settings.center:
         motions = [center_on_ground(m, settings.up_axis) for m in motions]
-    return motions
+    out = PreparedMotions(motions)
+    # the same frames cut() keeps: frame round(start * fps) up to, not including, round(end * fps)
+    out.start = int(round((start or 0.0) * fps)) / fps
+    out.end = None if end is None else int(round(end * fps)) / fps
+    return out
 
 
 def center_on_ground(motion: Motion, up_axis: str = "y") -> Motion:
@@ -75,18 +97,22 @@ def _meshes(motions, settings, view):
 
 def render_video(motions, out, settings: RenderSettings | None = None, *, audio=None, captions=None,
                  layout: str = "side", cols: int | None = None, view: View | None = None,
-                 frame_filter=None, progress: bool = False, label: str = "") -> dict:
+                 frame_filter=None, progress: bool = False, label: str = "", start: float | None = None,
+                 end: float | None = None) -> dict:
     """Render one or more motions (already at one fps) into an H.264 MP4.
 
     Args:
         motions: list of :class:`Motion` (see :func:`prepare_motions`).
         out: output ``.mp4`` path.
-        audio: path of the speech audio, or ``(samples, rate)``; starts at frame 0 and is
-            trimmed with the video to the shorter of the two.
+        audio: path of the speech audio, or ``(samples, rate)`` of the whole source; its
+            ``start``-``end`` window is muxed from frame 0 and trimmed with the video to the
+            shorter of the two.
         captions: one caption per panel (or None).
         layout, cols: ``side`` (one row) or ``grid``; ``cols`` forces the column count.
         view: the shared view; computed from ``motions`` when None.
         frame_filter: ``f(index, frame) -> frame`` applied to every composed frame.
+        start, end: the window (seconds) of the source the motions show, so the audio is cut
+            with them; default: the cut :func:`prepare_motions` recorded, else all of it.
 
     Returns:
         dict with ``n_frames``, ``fps``, ``width``, ``height``, ``duration`` and ``view``.
@@ -103,6 +129,9 @@ def render_video(motions, out, settings: RenderSettings | None = None, *, audio=
     audio_data = None
     if audio is not None:
         samples, rate = read_audio(audio) if not isinstance(audio, tuple) else audio
+        start = getattr(motions, "start", 0.0) if start is None else start
+        end = getattr(motions, "end", None) if end is None else end
+        samples = cut_audio(samples, rate, start, end, label=label or str(out))
         samples, n = fit_audio(samples, rate, n, fps, label=label or str(out))
         audio_data = (samples, rate)
     comp = Compositor(len(motions), settings.width, settings.height, layout=layout, cols=cols, captions=captions)

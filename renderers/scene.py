@@ -25,6 +25,7 @@ from renderers.figure import (
     leg_mask,
     srgb_to_linear,
 )
+from renderers.skeleton import joint_list
 
 
 @dataclass(frozen=True)
@@ -44,8 +45,10 @@ class RenderSettings:
     crf: int = 20                     # H.264 quality (lower is better)
     center: bool = True               # move each motion's mean root position to the origin (ground plane)
     style: FigureStyle = field(default_factory=FigureStyle)
+    drop_joints: tuple = ()           # joints not drawn nor framed, besides the non-body ones (renderers.skeleton)
 
     def __post_init__(self):
+        object.__setattr__(self, "drop_joints", joint_list(self.drop_joints))
         if not (isinstance(self.width, int) and isinstance(self.height, int)
                 and 16 <= self.width <= 7680 and 16 <= self.height <= 4320):
             raise InputError(f"resolution {self.width}x{self.height}: expected integers from 16x16 to 7680x4320",
@@ -68,7 +71,7 @@ class RenderSettings:
 
     def to_dict(self) -> dict:
         d = asdict(self)
-        d["style"] = self.style.to_dict()
+        d["style"], d["drop_joints"] = self.style.to_dict(), list(self.drop_joints)
         return d
 
     @classmethod

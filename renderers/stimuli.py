@@ -7,7 +7,7 @@ A YAML (or JSON) config says what to render (paths relative to the config file):
     conditions:                          # name -> motion file; {segment} is filled in
       natural: conditions/natural/{segment}.bvh
       baseline: conditions/baseline/{segment}.bvh
-    audio: audio/{segment}.wav           # optional; muxed from frame 0
+    audio: audio/{segment}.wav           # optional; cut with the motion (start-end)
     start: 0                             # optional cut (seconds) for every segment
     end: 10
     render: {width: 640, height: 480, view: front, framing: upper, fps: 30}
@@ -49,7 +49,7 @@ from evalsuite.parallel import run
 from renderers.attention import CHECKS, DEFAULT_TEXT
 
 # Part of every input hash: bump it when a change to the renderer changes how videos look.
-RENDERER_VERSION = "evalsuite-renderers-1"
+RENDERER_VERSION = "evalsuite-renderers-2"   # 2: audio cut with the motion; non-body joints left out
 MANIFEST_COLUMNS = list(manifest_contract.COLUMNS)
 DEFAULT_EXPECTED = {"instruction": "73", "distorted_audio": "bad", "distorted_video": "bad"}
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -68,7 +68,8 @@ def load_config(path) -> dict:
         raise InputError(f"not valid YAML/JSON ({exc})", path=path) from None
     if not isinstance(raw, dict):
         raise InputError("expected a mapping at the top level", path=path)
-    known = {"output", "segments", "conditions", "audio", "start", "end", "render", "attention_checks", "layout"}
+    known = {"output", "segments", "conditions", "audio", "start", "end", "render", "attention_checks", "layout",
+             "drop_joints"}
     unknown = set(raw) - known
     if unknown:
         raise InputError(f"unknown key(s) {', '.join(sorted(unknown))}; expected any of {', '.join(sorted(known))}",
@@ -102,8 +103,13 @@ def load_config(path) -> dict:
         cfg["conditions"][str(name)] = pattern
     from renderers.scene import RenderSettings
 
+    render = raw.get("render") or {}
+    if not isinstance(render, dict) or (raw.get("drop_joints") is not None and "drop_joints" in render):
+        raise InputError("expected a mapping of render settings, with drop_joints there or at the top level, "
+                         "not both", path=path, field="render")
+    render = {**render, **({"drop_joints": raw["drop_joints"]} if raw.get("drop_joints") is not None else {})}
     try:
-        cfg["settings"] = RenderSettings.from_dict(raw.get("render") or {})
+        cfg["settings"] = RenderSettings.from_dict(render)
     except TypeError as exc:
         raise InputError(f"bad render settings ({exc})", path=path, field="render") from None
     except InputError as exc:

@@ -47,3 +47,57 @@ def decoded_audio_seconds(path, rate=RATE) -> float:
 def ffmpeg_stream_info(path) -> str:
     return subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(path)],
                           capture_output=True, text=True).stderr
+
+
+def _genea2023_joints() -> dict:
+    """name -> (parent, OFFSET) of a stand-in with the GENEA 2023 (Talking With Hands) joint names and
+    hierarchy, in centimetres, Y up, facing +Z with its left at +X: ``body_world`` is a root at the floor
+    (the origin) whose child ``b_root`` is the pelvis, placed by its own position channels."""
+    j: dict = {"body_world": (None, (0, 0, 0)), "b_root": ("body_world", (0, 0, 0))}
+    for s, x in (("l", 1), ("r", -1)):
+        j[f"b_{s}_upleg"] = ("b_root", (9 * x, -5, 0))
+        j[f"b_{s}_leg"] = (f"b_{s}_upleg", (0, -42, 0))
+    j["b_spine0"] = ("b_root", (0, 8, 0))
+    for k in (1, 2, 3):
+        j[f"b_spine{k}"] = (f"b_spine{k - 1}", (0, 10, 0))
+    fingers = {"pinky": (3, -3), "ring": (4, -1), "middle": (4, 1), "index": (4, 3), "thumb": (1, 3)}
+    for s, x in (("l", 1), ("r", -1)):
+        chain = [("shoulder", "b_spine3", (4, 8, 0)), ("arm", "shoulder", (14, 0, 0)), ("arm_twist", "arm", (14, 0, 0)),
+                 ("forearm", "arm_twist", (14, 0, 0)), ("wrist_twist", "forearm", (12, 0, 0)),
+                 ("wrist", "wrist_twist", (12, 0, 0))]
+        for name, parent, off in chain:
+            j[f"b_{s}_{name}"] = (parent if parent.startswith("b_") else f"b_{s}_{parent}", (off[0] * x, off[1], off[2]))
+        order = ["pinky", "ring", "middle", "index", "thumb"] if s == "l" else ["thumb", "pinky", "middle", "ring", "index"]
+        for finger in order:
+            first = 0 if finger == "thumb" else 1
+            for k in range(first, 4):
+                parent = f"b_{s}_wrist" if k == first else f"b_{s}_{finger}{k - 1}"
+                dx, dz = fingers[finger] if k == first else ((2, 1) if finger == "thumb" else (3, 0))
+                j[f"b_{s}_{finger}{k}"] = (parent, (dx * x, 0, dz))
+    j["b_neck0"] = ("b_spine3", (0, 10, 0))
+    j["b_head"] = ("b_neck0", (0, 10, 0))
+    return j
+
+
+def genea2023_standin(seconds=1.0, fps=30.0) -> Motion:
+    """A hierarchical motion on the GENEA 2023 stand-in skeleton: world root fixed at the floor, the
+    pelvis swaying 95 cm above it, arms hanging at 70 degrees and the forearms waving."""
+    from evalsuite.motion.presets import GENEA2023
+    from evalsuite.motion.skeleton import Skeleton
+
+    joints = _genea2023_joints()
+    assert list(joints) == GENEA2023   # the stand-in keeps the real file's joint order
+    names = list(joints)
+    parents = [names.index(p) if p else -1 for p, _ in joints.values()]
+    six = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
+    channels = [six if n in ("body_world", "b_root") else six[3:] for n in names]
+    skeleton = Skeleton(names, parents, [off for _, off in joints.values()], channels)
+    t = np.arange(int(round(seconds * fps))) / fps
+    values = np.zeros((len(t), skeleton.n_channels))
+    start = {n: int(s) for n, s in zip(names, skeleton.channel_starts)}
+    values[:, start["b_root"]] = 3.0 * np.sin(2 * np.pi * 0.5 * t)           # sway along X
+    values[:, start["b_root"] + 1] = 95.0                                       # pelvis height
+    for s, sign in (("l", -1.0), ("r", 1.0)):
+        values[:, start[f"b_{s}_arm"]] = sign * 70.0                              # Zrotation: arms down
+        values[:, start[f"b_{s}_forearm"] + 1] = 30.0 * np.sin(2 * np.pi * 1.5 * t)   # Xrotation: wave
+    return Motion(skeleton, values, fps, name="genea2023_standin")
