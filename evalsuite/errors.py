@@ -40,3 +40,16 @@ class BVHError(InputError):
 
 class MotionError(InputError):
     """Motion data that does not fit the operation asked for (unknown joint, bad fps, ...)."""
+
+
+class UnknownNameError(InputError, KeyError):
+    """A name that no registry knows (metric family, page kind, generator, layout, ...).
+
+    Also a ``KeyError``, so a registry behaves as a mapping; the message lists the known names and the
+    closest ones ("did you mean ...")."""
+
+    __str__ = InputError.__str__
+
+
+class PluginError(InputError):
+    """An installed plug-in (entry point) that cannot be imported or does not fit its extension point."""

@@ -11,7 +11,7 @@ PACKAGES = ("evalsuite", "renderers", "study_app")
 # Lower layers first; a module may import from its own layer's package or any layer below it.
 LAYERS = [
     {"evalsuite._version", "evalsuite.errors", "evalsuite.hashing", "evalsuite.audio", "evalsuite.parallel",
-     "evalsuite.contracts"},
+     "evalsuite.contracts", "evalsuite.registry"},
     {"evalsuite.motion"},
     {"evalsuite.corpus"},
     {"evalsuite.metrics", "evalsuite.features"},

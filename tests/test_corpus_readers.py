@@ -159,7 +159,7 @@ def test_layout_detection_is_explicit_about_ambiguity_and_unknown_folders(tmp_pa
     with pytest.raises(InputError, match=r"empty: unknown corpus layout: no layout recognises this folder. Known "
                                          r"layouts: genea2020: GENEA 2020"):
         load_corpus(tmp_path / "empty")
-    with pytest.raises(InputError, match=r"layout: unknown layout 'trinity'; expected one of genea2020"):
+    with pytest.raises(InputError, match=r"layout: unknown layout 'trinity'; known: beat, folder, genea2020"):
         load_corpus(root, layout="trinity")
 
 

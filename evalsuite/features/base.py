@@ -1,7 +1,9 @@
 """The feature-recipe registry, the audio a recipe reads, and the frame-rate and length rules.
 
 A recipe is one :class:`Recipe` instance registered with :func:`register_recipe` (the built-in recipes
-register themselves when :mod:`evalsuite.features` is imported). :func:`extract` runs one by name.
+register themselves when :mod:`evalsuite.features` is imported; an installed package adds one with an entry
+point in the group ``evalsuite.feature_recipes``). :data:`RECIPES` is the
+:class:`~evalsuite.registry.Registry`. :func:`extract` runs one by name.
 
 Rules every recipe follows (documented in ``docs/features.md``):
 
@@ -32,8 +34,9 @@ import numpy as np
 from evalsuite.audio import read_wav
 from evalsuite.corpus.types import Transcript
 from evalsuite.errors import InputError
+from evalsuite.registry import Registry
 
-__all__ = ["Audio", "AudioInput", "Recipe", "register_recipe", "get_recipe", "list_recipes", "load_audio",
+__all__ = ["RECIPES", "Audio", "AudioInput", "Recipe", "register_recipe", "get_recipe", "list_recipes", "load_audio",
            "resample_frames", "fit_length"]
 
 AudioInput = Union[str, "os.PathLike[str]", tuple]  # noqa: UP007  (a runtime alias: Python 3.10 cannot | a string)
@@ -144,30 +147,23 @@ class Recipe:
         return json.dumps({**self.params, **params}, sort_keys=True, default=str)
 
 
-_REGISTRY: dict[str, Recipe] = {}
+RECIPES: Registry[Recipe] = Registry("feature recipe", "evalsuite.feature_recipes", base=Recipe,
+                                     name_of=lambda r: r.name, field="recipe")
 
 
 def register_recipe(recipe: Recipe, *, replace: bool = False) -> Recipe:
     """Add a recipe; its name must be new (``replace=True`` swaps an existing one)."""
-    if not recipe.name:
-        raise ValueError("a feature recipe needs a name")
-    if recipe.name in _REGISTRY and not replace:
-        raise ValueError(f"a feature recipe named {recipe.name!r} is registered already")
-    _REGISTRY[recipe.name] = recipe
-    return recipe
+    return RECIPES.register(recipe.name, recipe, replace=replace)
 
 
 def get_recipe(name: str) -> Recipe:
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise InputError(f"unknown feature recipe {name!r}; known: {', '.join(sorted(_REGISTRY))}",
-                         field="recipe") from None
+    return RECIPES.get(name)
 
 
 def list_recipes() -> list[Recipe]:
-    """The registered recipes, sorted by name."""
-    return [_REGISTRY[n] for n in sorted(_REGISTRY)]
+    """The registered recipes (installed plug-ins included), sorted by name."""
+    recipes = RECIPES.loaded()
+    return [recipes[n] for n in sorted(recipes)]
 
 
 def resample_frames(x: np.ndarray, native_fps: float, fps: float) -> np.ndarray:

@@ -4,22 +4,24 @@
   at import time), so listing them reads their specs.
 * **Installed plug-ins**: packages declare an entry point in the group ``evalsuite.generators``
   (``name = "package.module:Class"``). Listing shows them *without importing them* (name, distribution,
-  target); ``info`` and ``generate`` import the one asked for.
+  target); ``info`` and ``generate`` import the one asked for. A built-in name cannot be taken over.
+* **Registered** in a running process: :func:`register_generator`.
 * **Ad-hoc**: ``-g package.module:Class`` or ``-g path/to/file.py:Class``.
 """
 from __future__ import annotations
 
 import importlib
-import importlib.metadata
 import importlib.util
 import pathlib
 import sys
 from dataclasses import dataclass
 
+from evalsuite.errors import UnknownNameError
 from evalsuite.generators.contract import Generator, GeneratorError, GeneratorSpec
+from evalsuite.registry import Registry
 
-__all__ = ["BUILTIN", "ENTRY_POINT_GROUP", "GeneratorEntry", "list_generators", "find_generator",
-           "generator_class"]
+__all__ = ["BUILTIN", "ENTRY_POINT_GROUP", "GENERATORS", "GeneratorEntry", "UnknownGeneratorError",
+           "list_generators", "find_generator", "generator_class", "register_generator"]
 
 ENTRY_POINT_GROUP = "evalsuite.generators"
 
@@ -53,7 +55,7 @@ BUILTIN: dict[str, str] = {
 
 @dataclass(frozen=True)
 class GeneratorEntry:
-    """A generator as listed: ``origin`` is ``"builtin"``, ``"entry point"`` or ``"ad hoc"``; ``spec`` is None
+    """A generator as listed: ``origin`` is ``"builtin"``, ``"entry point"``, ``"registered"`` or ``"ad hoc"``; ``spec`` is None
     for an installed plug-in that has not been imported."""
 
     name: str
@@ -61,22 +63,6 @@ class GeneratorEntry:
     origin: str
     distribution: str | None = None
     spec: GeneratorSpec | None = None
-
-
-def _entry_points() -> dict[str, importlib.metadata.EntryPoint]:
-    return {ep.name: ep for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)}
-
-
-def list_generators() -> list[GeneratorEntry]:
-    """Built-ins (with their specs) and installed plug-ins (not imported), sorted by name."""
-    out = [GeneratorEntry(name, target, "builtin", None, generator_class(target).spec)
-           for name, target in BUILTIN.items()]
-    for name, ep in _entry_points().items():
-        if name in BUILTIN:
-            continue  # a built-in name cannot be taken over by an installed package
-        dist = f"{ep.dist.name} {ep.dist.version}" if ep.dist is not None else None
-        out.append(GeneratorEntry(name, ep.value, "entry point", dist, None))
-    return sorted(out, key=lambda e: e.name)
 
 
 def _load_file_class(path: pathlib.Path, cls_name: str) -> type:
@@ -114,6 +100,10 @@ def generator_class(target: str) -> type[Generator]:
         if attr is None:
             raise GeneratorError(f"module {module_name!r} has no {cls_name!r}", field="generator")
         cls = attr
+    return _checked(cls, target)
+
+
+def _checked(cls: object, target: str) -> type[Generator]:
     if not (isinstance(cls, type) and issubclass(cls, Generator)):
         raise GeneratorError(f"{target!r} is not a subclass of evalsuite.generators.Generator", field="generator")
     if not isinstance(getattr(cls, "spec", None), GeneratorSpec):
@@ -121,20 +111,44 @@ def generator_class(target: str) -> type[Generator]:
     return cls
 
 
+def _target_of(cls: type) -> str:
+    return f"{cls.__module__}:{cls.__qualname__}"
+
+
+class UnknownGeneratorError(GeneratorError, UnknownNameError):
+    """A generator name that is neither built in, registered, installed nor ``module:Class``."""
+
+
+GENERATORS: Registry[type[Generator]] = Registry(
+    "generator", ENTRY_POINT_GROUP, load=generator_class, error=UnknownGeneratorError, field="generator",
+    hint=" (or give 'module:Class' / 'file.py:Class')")
+for _name, _target in BUILTIN.items():
+    GENERATORS.register_lazy(_name, _target)
+
+
+def register_generator(name: str, cls: type[Generator], *, replace: bool = False) -> type[Generator]:
+    """Add a generator class under ``name`` in this process (an installed package uses an entry point)."""
+    return GENERATORS.register(name, _checked(cls, _target_of(cls)), replace=replace)
+
+
+def _entry(name: str, cls: type[Generator] | None) -> GeneratorEntry:
+    e = GENERATORS.entry(name)
+    target = e.target or (_target_of(cls) if cls is not None else "")
+    return GeneratorEntry(name, target, e.origin, e.distribution, cls.spec if cls is not None else None)
+
+
+def list_generators() -> list[GeneratorEntry]:
+    """Built-ins and registered ones (with their specs) and installed plug-ins (not imported), sorted by name."""
+    out = [_entry(e.name, None if e.origin == "entry point" and not e.loaded else GENERATORS.get(e.name))
+           for e in GENERATORS.entries()]
+    return sorted(out, key=lambda e: e.name)
+
+
 def find_generator(name: str) -> GeneratorEntry:
     """A generator by built-in name, installed plug-in name, or ``module:Class`` / ``file.py:Class``."""
-    if name in BUILTIN:
-        cls = generator_class(BUILTIN[name])
-        return GeneratorEntry(name, BUILTIN[name], "builtin", None, cls.spec)
-    eps = _entry_points()
-    if name in eps:
-        ep = eps[name]
-        cls = generator_class(ep.value)
-        dist = f"{ep.dist.name} {ep.dist.version}" if ep.dist is not None else None
-        return GeneratorEntry(name, ep.value, "entry point", dist, cls.spec)
+    if name in GENERATORS:
+        return _entry(name, GENERATORS.get(name))
     if ":" in name:
         cls = generator_class(name)
         return GeneratorEntry(cls.spec.name, name, "ad hoc", None, cls.spec)
-    known = ", ".join(sorted(set(BUILTIN) | set(eps)))
-    raise GeneratorError(f"unknown generator {name!r}; known: {known} (or give 'module:Class' / 'file.py:Class')",
-                         field="generator")
+    raise GENERATORS.unknown(name)

@@ -2,7 +2,9 @@
 
 Each layout is one function registered by name (:func:`~evalsuite.corpus.readers.base.register_layout`):
 ``genea2020``, ``genea2022``, ``genea2023`` (also the synthetic speaker's output), ``beat``, ``zeggs`` and
-``folder``. A new layout is one new function with a ``detect`` and a ``read``; see docs/corpus.md.
+``folder``. A new layout is one new function with a ``detect`` and a ``read``; see docs/corpus.md. An
+installed package adds one with an entry point in the group ``evalsuite.corpus_layouts``; :data:`LAYOUTS`
+is the :class:`~evalsuite.registry.Registry`.
 """
 from __future__ import annotations
 
@@ -56,12 +58,11 @@ def load_corpus(path: str | os.PathLike[str], layout: str | None = None, *, on_m
     """
     root = pathlib.Path(path)
     name = detect_layout(root) if layout is None else layout
-    if name not in LAYOUTS:
-        raise InputError(f"unknown layout {name!r}; expected one of {', '.join(LAYOUTS)}", field="layout")
+    reader = LAYOUTS.get(name)
     if not root.is_dir():
         raise InputError("no such corpus folder", path=root)
     builder = CorpusBuilder(root, name, ReadOptions(on_mismatch, tolerance, tolerance_rel, motion_fps))
-    LAYOUTS[name].read(root, builder)
+    reader.read(root, builder)
     if not builder.segments and not builder.meta["skipped"]:
-        raise InputError(f"no segments found for layout {name!r} ({LAYOUTS[name].description})", path=root)
+        raise InputError(f"no segments found for layout {name!r} ({reader.description})", path=root)
     return builder.build()

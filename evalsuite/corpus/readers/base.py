@@ -18,6 +18,7 @@ from evalsuite.corpus.readers.headers import motion_info, wav_info
 from evalsuite.corpus.transcripts import read_transcript
 from evalsuite.corpus.types import Corpus, Segment, Stream, Transcript, canonical_split
 from evalsuite.errors import InputError
+from evalsuite.registry import Registry
 
 __all__ = ["Layout", "LAYOUTS", "ReadOptions", "CorpusBuilder", "register_layout", "MISMATCH_POLICIES"]
 
@@ -55,7 +56,9 @@ class Layout:
     description: str
 
 
-LAYOUTS: dict[str, Layout] = {}
+# installed packages add layouts with entry points in the group evalsuite.corpus_layouts (docs/architecture.md)
+LAYOUTS: Registry[Layout] = Registry("layout", "evalsuite.corpus_layouts", base=Layout, name_of=lambda lay: lay.name,
+                                     field="layout")
 
 
 def register_layout(name: str, *, detect: Callable[[pathlib.Path], bool], description: str
@@ -63,7 +66,7 @@ def register_layout(name: str, *, detect: Callable[[pathlib.Path], bool], descri
                                   Callable[[pathlib.Path, CorpusBuilder], None]]:
     """Decorator: register ``read(root, builder)`` as the reader of layout ``name``."""
     def wrap(read: Callable[[pathlib.Path, CorpusBuilder], None]) -> Callable[[pathlib.Path, CorpusBuilder], None]:
-        LAYOUTS[name] = Layout(name, detect, read, description)
+        LAYOUTS.register(name, Layout(name, detect, read, description), replace=True)
         return read
     return wrap
 

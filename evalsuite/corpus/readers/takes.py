@@ -6,7 +6,7 @@ import pathlib
 import re
 
 from evalsuite.corpus.readers.base import CorpusBuilder, register_layout
-from evalsuite.corpus.transcripts import TRANSCRIPT_SUFFIXES
+from evalsuite.corpus.transcripts import transcript_suffixes
 from evalsuite.errors import InputError
 
 _MOTION = (".bvh", ".npz", ".npy", ".csv")
@@ -22,9 +22,11 @@ def _files(root: pathlib.Path, recursive: bool) -> list[pathlib.Path]:
 
 
 def _group(files: list[pathlib.Path], pattern: re.Pattern[str] | None, motion: tuple[str, ...] = _MOTION,
-           transcripts: tuple[str, ...] = TRANSCRIPT_SUFFIXES) -> dict[str, dict[str, pathlib.Path]]:
+           transcripts: tuple[str, ...] | None = None) -> dict[str, dict[str, pathlib.Path]]:
     """stem -> {"audio"|"motion"|"transcript": path}; two files of one kind for a stem is an error, except that
-    a ``.bvh`` is preferred to other motion files (BEAT2 beside SMPL-X ``.npz``)."""
+    a ``.bvh`` is preferred to other motion files (BEAT2 beside SMPL-X ``.npz``). ``transcripts``: the
+    transcript suffixes (default: every registered transcript format's, installed plug-ins included)."""
+    transcripts = transcript_suffixes() if transcripts is None else transcripts
     out: dict[str, dict[str, pathlib.Path]] = {}
     for p in files:
         suffix = p.suffix.lower()
@@ -95,8 +97,9 @@ def read_beat(root: pathlib.Path, b: CorpusBuilder) -> None:
 def _detect_zeggs(root: pathlib.Path) -> bool:
     files = _files(root, True)
     named = [p for p in files if _ZEGGS.match(p.stem)]
+    transcripts = transcript_suffixes()
     return (any(p.suffix.lower() == ".bvh" for p in named) and any(p.suffix.lower() == ".wav" for p in named)
-            and not any(p.suffix.lower() in TRANSCRIPT_SUFFIXES for p in named))
+            and not any(p.suffix.lower() in transcripts for p in named))
 
 
 @register_layout("zeggs", detect=_detect_zeggs,
