@@ -57,9 +57,10 @@ def main() -> int:
             lines.append(f"weights {name} {sha}")
             folders[name] = root / "out" / name
             generate(find_generator(name), requests, folders[name], model_dir=model, seed=7, progress=False)
-        from evalsuite.metrics import score_folders
+        from evalsuite.metrics.engine import score_folders
 
-        result = score_folders(folders["natural"], [folders[n] for n in folders if n != "natural"], progress=False)
+        result = score_folders(folders["natural"], [folders[n] for n in folders if n != "natural"],
+                               corpus=root / "speaker", progress=False)
         for row in sorted(result.summary, key=lambda r: (str(r.get("condition")), str(r.get("metric")))):
             cells = []
             for key in sorted(row):
