@@ -7,7 +7,9 @@ was expected, so the CLI can print it without a traceback.
 """
 from __future__ import annotations
 
+import difflib
 import os
+from collections.abc import Iterable
 
 
 class InputError(ValueError):
@@ -32,6 +34,12 @@ class InputError(ValueError):
         if field:
             where += f"{field}: "
         super().__init__(where + message)
+
+
+def did_you_mean(name: object, known: Iterable[str]) -> str:
+    """``". Did you mean 'a' or 'b'?"`` with the (at most three) known names closest to ``name``, or ``""``."""
+    close = difflib.get_close_matches(str(name), list(known), n=3, cutoff=0.6)
+    return f". Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
 class BVHError(InputError):

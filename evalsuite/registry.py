@@ -32,7 +32,6 @@ A :class:`Registry` maps a name to an item and is a read-only ``Mapping``:
 """
 from __future__ import annotations
 
-import difflib
 import importlib
 import importlib.metadata
 import threading
@@ -41,7 +40,7 @@ from collections.abc import Callable, ItemsView, Iterator, Mapping, ValuesView
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar, cast
 
-from evalsuite.errors import InputError, PluginError, UnknownNameError
+from evalsuite.errors import InputError, PluginError, UnknownNameError, did_you_mean
 
 __all__ = ["Registry", "Entry", "import_target"]
 
@@ -195,8 +194,7 @@ class Registry(Mapping[str, T], Generic[T]):
     def unknown(self, name: str) -> UnknownNameError:
         """The error for an unknown name: the known names and the closest ones."""
         known = sorted(self.names())
-        close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
-        hint = f". Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        hint = did_you_mean(name, known)
         return self._error(f"unknown {self.what} {name!r}; known: {', '.join(known) or '(none)'}{self._hint}{hint}",
                            field=self.field)
 

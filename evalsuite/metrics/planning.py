@@ -13,7 +13,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from evalsuite.errors import InputError
+from evalsuite.errors import InputError, did_you_mean
 from evalsuite.metrics.families import MetricFamily, metric_index, registered_families
 from evalsuite.motion.io import list_motion_files, load_motion
 from evalsuite.motion.presets import PRESETS, resolve_joints
@@ -73,8 +73,8 @@ def resolve_metrics(spec: str | Sequence[str] | None, audio: bool,
         elif item in index:
             names = [item]
         else:
-            raise InputError(f"unknown metric {item!r}; expected families {', '.join(fams)} or metrics "
-                             f"{', '.join(index)}", field="metrics")
+            raise InputError(f"unknown metric {item!r}; expected a family ({', '.join(fams)}) or one of their "
+                             f"metrics (docs/metrics.md){did_you_mean(item, [*fams, *index])}", field="metrics")
         out.extend(n for n in names if n not in out)
     without = [m for m in out if fams[index[m][0]].needs_corpus]
     if without and not corpus:
