@@ -70,6 +70,23 @@ def test_bootstrap_interval_is_seeded_and_covers_the_distance():
     assert all(math.isnan(v) for v in bootstrap_fd(ref, cond, n_bootstrap=0))
 
 
+def test_bootstrap_interval_contains_the_estimate_where_the_percentile_interval_does_not():
+    """Natural vs natural at 5 sequences a side (the reviewer's `natural 0 [0.95, 712]`): every resample's FD
+    lies above the estimate, so the percentile interval excludes it; the centred interval does not."""
+    from evalsuite.learned.fgd import bootstrap_fd_samples
+
+    rng = np.random.default_rng(2)
+    ref = [rng.normal(size=(30, 8)) for _ in range(5)]
+    cond = [rng.normal(size=(30, 8)) for _ in range(5)]
+    value = frechet_distance_samples(np.concatenate(ref), np.concatenate(cond))
+    samples = bootstrap_fd_samples(ref, cond, n_bootstrap=400, seed=1)
+    assert np.percentile(samples, 2.5) > value            # the old interval would exclude its estimate
+    low, high = bootstrap_fd(ref, cond, n_bootstrap=400, seed=1)
+    assert low <= value <= high
+    q_low, q_mid, q_high = np.percentile(samples, [2.5, 50, 97.5])
+    assert (low, high) == pytest.approx((max(value - (q_mid - q_low), 0.0), value + (q_high - q_mid)), rel=1e-12)
+
+
 def test_score_fgd_rows_follow_the_contract_and_count_windows():
     model = trained()
     nat = natural()
@@ -94,8 +111,10 @@ def test_score_fgd_rows_follow_the_contract_and_count_windows():
     assert raw["noisy"]["value"] > raw["natural"]["value"]
     assert fgd["noisy"]["ci_low"] <= fgd["noisy"]["value"] <= fgd["noisy"]["ci_high"]
     # Near 0 the FD's small-sample bias dominates: resamples (with duplicates) sit above the point
-    # estimate, so only the interval's order is asserted there (documented in docs/learned.md).
-    assert 0 <= fgd["natural"]["ci_low"] <= fgd["natural"]["ci_high"] < fgd["noisy"]["ci_low"]
+    # estimate; the interval is moved onto the estimate and the bias reported beside it.
+    assert 0 <= fgd["natural"]["ci_low"] <= fgd["natural"]["value"] <= fgd["natural"]["ci_high"]
+    assert fgd["natural"]["ci_high"] < fgd["noisy"]["ci_low"]
+    assert fgd["natural"]["bootstrap_bias"] > 0
     assert math.isnan(raw["natural"]["ci_low"])
     # Raw-space FGD is the FD of the flattened normalised windows, computed independently here.
     flat = [np.concatenate([model.normalize(model.windows(s[n])).reshape(-1, WINDOW * model.arch.pose_dim) for n in sorted(s)])

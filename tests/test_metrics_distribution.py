@@ -84,3 +84,92 @@ def test_static_motion_has_zero_diversity():
         warnings.simplefilter("ignore")
         assert l1div([still]) == pytest.approx(0.0, abs=1e-12)
         assert div_k([still]) == pytest.approx(0.0, abs=1e-12)
+
+
+# --- the bootstrap of FD_g / FD_k: fast resampled distances, the small-sample rule ----------
+def _sequence_moments(seqs):
+    return [moments(s) for s in seqs]
+
+
+def _one_by_one(ref, cond, weights):
+    """The scorer's former bootstrap: moments combined and a Fréchet distance computed per resample."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FrechetWarning)
+        return np.array([frechet_from_moments(combine_moments(ref, w), combine_moments(cond, w)) for w in weights])
+
+
+def test_fast_bootstrap_equals_the_resample_by_resample_computation():
+    from evalsuite.metrics.distribution import bootstrap_frechet
+    from evalsuite.metrics.families import bootstrap_weights
+
+    rng = np.random.default_rng(5)
+    mix = rng.normal(size=(12, 12))
+    ref = _sequence_moments([rng.normal(size=(60, 12)) @ mix + 50.0 for _ in range(9)])
+    cond = _sequence_moments([rng.normal(size=(45, 12)) @ mix * 1.3 + 52.0 for _ in range(9)])
+    weights = bootstrap_weights(9, 70, seed=3, cond_index=1)
+    done = []
+    fast = bootstrap_frechet(ref, cond, weights, threads=1, chunk=16, progress=done.append)
+    np.testing.assert_allclose(fast, _one_by_one(ref, cond, weights), rtol=1e-8)
+    assert sum(done) == 70 and len(done) == 5  # progress per chunk
+    # the numbers do not depend on the number of threads
+    np.testing.assert_array_equal(bootstrap_frechet(ref, cond, weights, threads=2, chunk=16), fast)
+    # all weights 1: the point estimate
+    assert bootstrap_frechet(ref, cond, np.ones((1, 9)))[0] == pytest.approx(
+        frechet_from_moments(combine_moments(ref), combine_moments(cond)), rel=1e-9)
+
+
+def test_fast_bootstrap_is_exact_on_rank_deficient_pose_covariances():
+    """Poses of a skeleton have directions of zero variance (joints at fixed offsets). The fast bootstrap works
+    in the range of the reference covariance, so it gives the distance of the same data without those
+    directions (the exact value, by rotation invariance); the resample-by-resample form adds the square
+    roots of round-off eigenvalues there."""
+    from evalsuite.metrics.distribution import bootstrap_frechet
+    from evalsuite.metrics.families import bootstrap_weights
+
+    rng = np.random.default_rng(6)
+    r, d = 10, 30
+    basis = np.linalg.qr(rng.normal(size=(d, r)))[0]          # r varying directions in d dimensions
+    mix = rng.normal(size=(r, r))
+    low_ref = [rng.normal(size=(50, r)) @ mix * 20 for _ in range(8)]
+    low_cond = [rng.normal(size=(50, r)) @ mix * 25 + 3.0 for _ in range(8)]
+    offset = rng.normal(size=d) * 100
+    embed = lambda seqs: [s @ basis.T + offset for s in seqs]  # noqa: E731
+    weights = bootstrap_weights(8, 40, seed=0, cond_index=2)
+    fast = bootstrap_frechet(_sequence_moments(embed(low_ref)), _sequence_moments(embed(low_cond)), weights)
+    exact = _one_by_one(_sequence_moments(low_ref), _sequence_moments(low_cond), weights)
+    np.testing.assert_allclose(fast, exact, rtol=1e-8)
+
+
+def test_fast_bootstrap_falls_back_when_a_resample_is_singular():
+    from evalsuite.metrics.distribution import bootstrap_frechet
+
+    rng = np.random.default_rng(7)
+    ref = _sequence_moments([rng.normal(size=(40, 6)) for _ in range(3)] + [rng.normal(size=(4, 6))])
+    cond = _sequence_moments([rng.normal(size=(40, 6)) + 1 for _ in range(3)] + [rng.normal(size=(4, 6))])
+    weights = np.array([[0.0, 0.0, 0.0, 4.0], [1.0, 1.0, 1.0, 1.0]])  # only the 4-frame sequence: rank 3 of 6
+    fast = bootstrap_frechet(ref, cond, weights)
+    np.testing.assert_allclose(fast, _one_by_one(ref, cond, weights), rtol=1e-6)
+
+
+def test_two_samples_of_one_gaussian_at_the_stated_size_lie_five_percent_apart():
+    """The small-sample rule's number: E[FD] ~ (1/N1 + 1/N2)(D + 5)/4 tr S, 5 % at 10 (D + 5) per side."""
+    from evalsuite.metrics.frechet import min_samples
+
+    rng = np.random.default_rng(8)
+    d = 20
+    n = min_samples(d)
+    assert n == 250
+    fds = [frechet_distance_samples(rng.normal(size=(n, d)) * 3, rng.normal(size=(n, d)) * 3) for _ in range(40)]
+    assert np.mean(fds) / (9 * d) == pytest.approx(0.05, rel=0.08)
+
+
+def test_sample_size_warnings_name_the_rule_that_is_broken():
+    from evalsuite.metrics.frechet import sample_size_warnings
+
+    assert sample_size_warnings((250, 250), 20, (10, 10), "frames") == []
+    (bias,) = sample_size_warnings((249, 250), 20, (10, 10), "frames")
+    assert "use at least 250 frames per side" in bias
+    (few,) = sample_size_warnings((5000, 5000), 20, (10, 9), "frames")
+    assert "9 sequence(s)" in few and "fewer than 10" in few
+    singular, _, _ = sample_size_warnings((20, 400), 20, (5, 5), "windows")
+    assert "20 windows for 20 dimensions: the covariance is singular" in singular

@@ -103,3 +103,17 @@ def test_the_engine_reports_what_the_public_functions_compute(folders):
         assert value("ape") == pytest.approx(average_position_error(pos, natural[name]).mean(), rel=1e-12)
         assert value("div_k") == pytest.approx(div_k([pos]), rel=1e-12)
     assert summary.loc[("jitter", "l1div"), "value"] == pytest.approx(l1div(list(jitter.values())), rel=1e-12)
+
+
+def test_centred_interval_contains_the_estimate_when_every_resample_lies_above_it():
+    from evalsuite.metrics.families.base import bootstrap_bias, centred_ci, percentile_ci
+
+    samples = 5.0 + np.random.default_rng(0).exponential(3.0, size=1000)  # a Fréchet distance's biased resamples
+    low, high = percentile_ci(samples)
+    assert low > 1.0  # the percentile interval excludes the estimate 1.0
+    q_low, q_mid, q_high = np.percentile(samples, [2.5, 50, 97.5])
+    assert centred_ci(1.0, samples) == pytest.approx((0.0, 1.0 + q_high - q_mid))   # clipped at 0
+    assert centred_ci(1.0, samples, floor=None) == pytest.approx((1.0 - (q_mid - q_low), 1.0 + q_high - q_mid))
+    assert centred_ci(10.0, samples)[0] <= 10.0 <= centred_ci(10.0, samples)[1]
+    assert bootstrap_bias(1.0, samples) == pytest.approx(samples.mean() - 1.0)
+    assert np.isnan(centred_ci(1.0, [np.nan])[0])

@@ -103,7 +103,10 @@ def test_score_end_to_end_matches_independent_computation(folders, tmp_path):
     import hashlib
     assert prov["files"]["jitter"][f.stem]["sha256"] == hashlib.sha256(f.read_bytes()).hexdigest()
     assert "\\toprule" in (out / "summary.tex").read_text()
-    assert res.output == ""  # --quiet
+    assert res.stdout == ""  # --quiet: no table, no progress bar
+    # 4 sequences of 105 frames: every condition's Fréchet distances are flagged as too small a sample
+    assert "jitter: fd_g: 4 sequence(s) on a side (fewer than 10)" in res.stderr
+    assert all(line.startswith("warning: ") for line in res.stderr.splitlines())
 
 
 def test_table_is_printed_with_units_and_direction(folders, tmp_path):
@@ -360,3 +363,26 @@ def test_condition_with_nothing_scored_fails_after_writing_the_rest(folders, tmp
     assert "unexpected end of the hierarchy" in res.output  # the reason, per file
     summary = pd.read_csv(tmp_path / "o" / "summary.csv")
     assert set(summary.condition) == {"natural", "jitter"}
+
+
+def test_fd_bootstrap_contains_its_estimate_reports_bias_progress_and_small_samples(folders, capsys):
+    from evalsuite.metrics.engine import score_folders
+
+    result = score_folders(f"natural={folders['natural']}", [f"jitter={folders['jitter']}",
+                           f"smoothed={folders['smoothed']}", f"static={folders['static']}"],
+                           metrics="distribution", bootstrap=100, seed=1, jobs=2, figures=False, progress=True)
+    rows = [r for r in result.summary if r["metric"] in ("fd_g", "fd_k")]
+    assert len(rows) == 8
+    for r in rows:
+        assert r["ci_low"] <= r["value"] <= r["ci_high"], r
+        assert np.isfinite(r["bootstrap_bias"])
+    natural = [r for r in rows if r["condition"] == "natural"]
+    assert all((r["value"], r["ci_low"], r["ci_high"], r["bootstrap_bias"]) == (0, 0, 0, 0) for r in natural)
+    # 4 sequences of 105 frames, 57 dimensions: both rules fire for every condition but the natural one
+    for cond in ("jitter", "smoothed", "static"):
+        for q, n in (("fd_g", 420), ("fd_k", 416)):
+            assert any(i.startswith(f"{cond}: {q}: 4 sequence(s) on a side") for i in result.issues)
+            assert any(i.startswith(f"{cond}: {q}: {n} reference and {n} condition") for i in result.issues)
+    assert not any(i.startswith("natural:") for i in result.issues)
+    err = capsys.readouterr().err
+    assert "bootstrap" in err and "800/800" in err and "resample/s" in err   # 4 conditions x 2 metrics x 100

@@ -43,6 +43,18 @@ def _write_rows(rows: list[dict], fmt: str, out) -> str:
     return text
 
 
+def _warn_small(rows: list[dict], reference: dict, conditions: dict) -> None:
+    """Warn (stderr) where the FGD's samples are too small (the rule of `evalsuite score`)."""
+    from evalsuite.learned.network import LATENT_DIM
+    from evalsuite.metrics.frechet import sample_size_warnings
+
+    for r in rows:
+        if r["metric"] == "fgd":
+            for line in sample_size_warnings((r["n_windows_reference"], r["n_windows_condition"]), LATENT_DIM,
+                                             (len(reference), len(conditions[r["condition"]])), "windows"):
+                click.secho(f"warning: {r['condition']}: fgd: {line}", fg="yellow", err=True)
+
+
 def _warn_resampled(model_fps: float, label_sets: dict, why: str = "to the model's frame rate") -> list[dict]:
     """Warn (stderr) about every file the model will resample; returns the records for provenance."""
     from evalsuite.learned.representation import describe_resampling, resampled_files
@@ -227,6 +239,7 @@ def score(model_path, natural_dir, condition_dirs, raw, latent, n_bootstrap, boo
                     f"for the model ({model.fps:g} fps; listed in the output's resampled field)")
     rows = score_fgd(model, reference, conditions, raw=raw, n_bootstrap=n_bootstrap, bootstrap_unit=bootstrap_unit,
                      seed=seed, progress=True)
+    _warn_small(rows, reference, conditions)
     if latent:
         for r in score_latent(model, reference, conditions, n_codes=n_codes, seed=seed):
             rows.append({"condition": r["condition"], "metric": r["metric"], "value": r["value"], "unit": r["unit"],
@@ -236,8 +249,8 @@ def score(model_path, natural_dir, condition_dirs, raw, latent, n_bootstrap, boo
     if fmt == "markdown":
         click.echo(f"{model.describe()}\n")
         click.echo(f"reference: {natural_dir} ({len(reference)} sequences); bootstrap {n_bootstrap} x "
-                   f"{bootstrap_unit}, 95% percentile CI, seed {seed} (near 0 the FD's small-sample bias can put "
-                   "the CI above the value; see docs/learned.md)\n")
+                   f"{bootstrap_unit}, 95% percentile CI moved to have its median on the value, seed {seed} (the "
+                   "FD's small-sample bias is in the bootstrap_bias column of --format csv/json; see docs/learned.md)\n")
     text = _write_rows(rows, fmt, out)
     click.echo(text, nl=False)
 
@@ -263,6 +276,8 @@ def check(model_path, natural_dir, seed, as_json, data_fps):
     resampled = _warn_resampled(model.fps, {"natural": natural}, f"for the model ({model.fps:g} fps)")
     result = check_model(model, natural, seed=seed)
     result["resampled"] = resampled
+    for line in result["warnings"]:
+        click.secho(f"warning: {line}", fg="yellow", err=True)
     if as_json:
         click.echo(json.dumps(result, indent=2, default=float))
     else:
@@ -270,7 +285,8 @@ def check(model_path, natural_dir, seed, as_json, data_fps):
                    f"{result['n_sequences'][1]} sequences, motion scale {result['motion_scale']:.4g}\n")
         click.echo(format_table(result))
     if not result["passed"]:
-        raise click.ClickException("some sanity checks failed (see the table)")
+        raise click.ClickException("some sanity checks failed (see the table)" + (
+            "; the natural halves are too small for FGD (see the warnings)" if result["warnings"] else ""))
 
 
 @fgd.command()

@@ -1,8 +1,9 @@
 """FGD as a metric family of ``evalsuite score`` (``--fgd MODEL``), built on :mod:`evalsuite.learned.fgd`.
 
 Per sequence (in the workers) the motion is cut into the model's windows and encoded; per condition the
-Gaussians of the natural and the condition's features give FGD, with the percentile bootstrap over
-sequences of :func:`~evalsuite.learned.fgd.bootstrap_fd`, and optionally the raw-space distance. This
+Gaussians of the natural and the condition's features give FGD, with the bootstrap over sequences of
+:func:`~evalsuite.learned.fgd.bootstrap_fd_samples` (interval centred on the estimate, bias beside it; too
+small samples reported), and optionally the raw-space distance. This
 module sits above :mod:`evalsuite.metrics` (it imports it, never the reverse); the ``score`` command adds
 the family for a run when a model is given.
 """
@@ -15,11 +16,12 @@ import warnings
 import numpy as np
 
 from evalsuite.errors import InputError
-from evalsuite.learned.fgd import FEATURE_UNIT, RAW_UNIT, RawReference, bootstrap_fd
+from evalsuite.learned.fgd import FEATURE_UNIT, RAW_UNIT, RawReference, bootstrap_fd_samples
 from evalsuite.learned.modelfile import FeatureModel, load_model
 from evalsuite.learned.representation import needs_resampling
 from evalsuite.metrics.families import MetricFamily, MetricInfo, ReduceContext, SequenceContext
-from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian_stats
+from evalsuite.metrics.families.base import bootstrap_bias, centred_ci
+from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian_stats, sample_size_warnings
 
 __all__ = ["FGDFamily"]
 
@@ -60,6 +62,9 @@ class FGDFamily(MetricFamily):
         if self.raw:
             ctx.record["fgd_raw_windows"] = model.normalize(windows).reshape(len(windows), -1)
 
+    def bootstrap_work(self, setup) -> int:
+        return 1
+
     def reduce(self, ctx: ReduceContext) -> None:
         if ctx.cond == ctx.reference:
             return
@@ -79,10 +84,16 @@ class FGDFamily(MetricFamily):
             warnings.simplefilter("ignore", FrechetWarning)
             value = frechet_distance(*gaussian_stats(np.concatenate(ref_feats)),
                                      *gaussian_stats(np.concatenate(cond_feats)))
-        ci = bootstrap_fd(ref_feats, cond_feats, n_bootstrap=ctx.n_bootstrap, seed=ctx.seed)
+        ctx.issues.extend(f"{ctx.cond}: fgd: {w}" for w in sample_size_warnings(
+            (n_ref, n_cond), ref_feats[0].shape[1], (len(ref_feats), len(cond_feats)), "windows"))
+        samples = bootstrap_fd_samples(ref_feats, cond_feats, n_bootstrap=ctx.n_bootstrap, seed=ctx.seed)
+        ctx.advance(ctx.n_bootstrap)
+        ci = centred_ci(value, samples) if samples.size else (math.nan, math.nan)
         model = _model(self.model_path)
         extra = {"model_hash": model.content_hash, "window": int(model.window),
                  "n_windows_reference": int(n_ref), "n_windows_condition": int(n_cond)}
+        if samples.size:
+            extra["bootstrap_bias"] = bootstrap_bias(value, samples)
         ctx.add("fgd", value, ci=ci, n=len(cond_feats))
         ctx.summary[-1].update(extra)
         if self.raw:

@@ -20,8 +20,12 @@ a sequence that cannot match (missing joints, shorter than one window) is an Inp
 
 Bootstrap CI (``fgd`` only): ``n_bootstrap`` resamples with replacement of whole sequences
 (default; windows of one sequence are correlated) or of windows, drawn independently for
-the reference and the condition; percentile interval at ``ci_level``. With fewer than 2
-sequences on a side, windows are resampled instead. Seeded: same inputs + seed = same CI.
+the reference and the condition; the percentile interval at ``ci_level`` moved so that the
+resamples' median sits on the estimate (:func:`evalsuite.metrics.families.base.centred_ci`: it
+contains the estimate; resamples with duplicate sequences have a smaller effective sample and so
+a larger small-sample bias), with Efron's bootstrap bias (mean of the resamples minus the
+estimate) in ``bootstrap_bias``. With fewer than 2 sequences on a side, windows are resampled
+instead. Seeded: same inputs + seed = same CI.
 """
 from __future__ import annotations
 
@@ -35,12 +39,13 @@ from tqdm.auto import tqdm
 from evalsuite.errors import InputError
 from evalsuite.learned.modelfile import FeatureModel, load_model, torch_threads
 from evalsuite.learned.representation import resampled_files
+from evalsuite.metrics.families.base import bootstrap_bias, centred_ci
 from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian_stats
 
 FEATURE_UNIT = "feature^2"
 RAW_UNIT = "z^2"
 ROW_KEYS = ("condition", "metric", "value", "unit", "ci_low", "ci_high", "model_hash", "window",
-            "n_windows_reference", "n_windows_condition", "resampled")
+            "n_windows_reference", "n_windows_condition", "resampled", "bootstrap_bias")
 
 
 class WindowSet:
@@ -98,9 +103,9 @@ def _units(groups: list[np.ndarray], unit: str) -> list[np.ndarray]:
     return [g for g in groups if len(g)]
 
 
-def bootstrap_fd(reference: list[np.ndarray], condition: list[np.ndarray], *, n_bootstrap: int = 1000,
-                 unit: str = "sequence", seed: int = 0, ci_level: float = 0.95) -> tuple[float, float]:
-    """Percentile bootstrap interval of the Fréchet distance between two grouped sample sets.
+def bootstrap_fd_samples(reference: list[np.ndarray], condition: list[np.ndarray], *, n_bootstrap: int = 1000,
+                         unit: str = "sequence", seed: int = 0) -> np.ndarray:
+    """The Fréchet distance of ``n_bootstrap`` resamples ``(B,)`` of two grouped sample sets.
 
     ``reference``/``condition`` are lists of per-sequence arrays ``(n_i, D)``; ``unit``
     ``"sequence"`` resamples whole arrays, ``"window"`` single rows (see module docstring).
@@ -108,7 +113,7 @@ def bootstrap_fd(reference: list[np.ndarray], condition: list[np.ndarray], *, n_
     if unit not in ("sequence", "window"):
         raise InputError(f"bootstrap unit must be 'sequence' or 'window', got {unit!r}")
     if n_bootstrap < 1:
-        return math.nan, math.nan
+        return np.zeros(0)
     rng = np.random.default_rng(seed)
     shift = np.concatenate(reference).mean(axis=0)
     sides = []
@@ -118,10 +123,20 @@ def bootstrap_fd(reference: list[np.ndarray], condition: list[np.ndarray], *, n_
         weights = rng.multinomial(u, np.full(u, 1.0 / u), size=n_bootstrap).astype(np.float64)
         sides.append(_resampled_gaussians(_unit_moments(units, shift), weights, shift))
     (mu_r, cov_r), (mu_c, cov_c) = sides
-    values = batched_frechet_distance(mu_r, cov_r, mu_c, cov_c)
-    alpha = (1.0 - ci_level) / 2.0
-    low, high = np.percentile(values, [100 * alpha, 100 * (1 - alpha)])
-    return float(low), float(high)
+    return batched_frechet_distance(mu_r, cov_r, mu_c, cov_c)
+
+
+def bootstrap_fd(reference: list[np.ndarray], condition: list[np.ndarray], *, n_bootstrap: int = 1000,
+                 unit: str = "sequence", seed: int = 0, ci_level: float = 0.95) -> tuple[float, float]:
+    """Bootstrap interval of the Fréchet distance between two grouped sample sets: the percentile interval
+    of :func:`bootstrap_fd_samples` moved to have its median on the estimate (``centred_ci``)."""
+    samples = bootstrap_fd_samples(reference, condition, n_bootstrap=n_bootstrap, unit=unit, seed=seed)
+    if not samples.size:
+        return math.nan, math.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FrechetWarning)
+        value = frechet_distance(*gaussian_stats(np.concatenate(reference)), *gaussian_stats(np.concatenate(condition)))
+    return centred_ci(value, samples, level=ci_level)
 
 
 def batched_frechet_distance(mu1, sigma1, mu2, sigma2) -> np.ndarray:
@@ -201,10 +216,11 @@ def resampled_text(records: list[dict]) -> str:
     return "; ".join(f"{r['file']} ({r['from_fps']:g} -> {r['to_fps']:g} fps)" for r in records)
 
 
-def _row(condition, metric, value, unit, ci, model, window, n_ref, n_cond, resampled="") -> dict:
+def _row(condition, metric, value, unit, ci, model, window, n_ref, n_cond, resampled="", bias=math.nan) -> dict:
     return {"condition": condition, "metric": metric, "value": float(value), "unit": unit,
             "ci_low": ci[0], "ci_high": ci[1], "model_hash": model.content_hash, "window": int(window),
-            "n_windows_reference": int(n_ref), "n_windows_condition": int(n_cond), "resampled": resampled}
+            "n_windows_reference": int(n_ref), "n_windows_condition": int(n_cond), "resampled": resampled,
+            "bootstrap_bias": float(bias)}
 
 
 def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True, n_bootstrap: int = 1000,
@@ -221,9 +237,10 @@ def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True
 
     Returns:
         rows (dicts) with keys ``condition, metric ("fgd" | "fgd_raw"), value, unit, ci_low,
-        ci_high, model_hash, window, n_windows_reference, n_windows_condition, resampled`` (the
-        reference and condition files resampled by interpolation to the model's frame rate,
-        ``file (from -> to fps); ...``, empty when none was).
+        ci_high, model_hash, window, n_windows_reference, n_windows_condition, resampled,
+        bootstrap_bias`` (``resampled``: the reference and condition files resampled by
+        interpolation to the model's frame rate, ``file (from -> to fps); ...``, empty when none
+        was; ``bootstrap_bias``: mean of the resampled FGDs minus the FGD, NaN without bootstrap).
     """
     model = model_path if isinstance(model_path, FeatureModel) else load_model(model_path)
     ref = WindowSet(model, reference, raw=raw, label="reference")
@@ -243,11 +260,13 @@ def score_fgd(model_path, reference: dict, conditions: dict, *, raw: bool = True
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", FrechetWarning)
             value = frechet_distance(*ref_stats, *gaussian_stats(feats))
-        ci = bootstrap_fd(ref.features, cond.features, n_bootstrap=n_bootstrap, unit=bootstrap_unit,
-                          seed=seed, ci_level=ci_level)
+        samples = bootstrap_fd_samples(ref.features, cond.features, n_bootstrap=n_bootstrap, unit=bootstrap_unit,
+                                       seed=seed)
+        ci = centred_ci(value, samples, level=ci_level) if samples.size else (math.nan, math.nan)
+        bias = bootstrap_bias(value, samples) if samples.size else math.nan
         resampled = resampled_text(ref.resampled + cond.resampled)
         rows.append(_row(name, "fgd", value, FEATURE_UNIT, ci, model, model.window, ref.n_windows, cond.n_windows,
-                         resampled))
+                         resampled, bias))
         if raw_ref is not None and cond.raw is not None:
             rows.append(_row(name, "fgd_raw", raw_ref.distance(cond.raw)["value"], RAW_UNIT, (math.nan, math.nan),
                              model, model.window, ref.n_windows, cond.n_windows, resampled))

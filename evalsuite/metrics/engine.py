@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from evalsuite.errors import InputError
 from evalsuite.hashing import file_sha256
@@ -214,8 +215,12 @@ class _Folder:
 
 
 def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]], *, bootstrap: int = 0, seed: int = 0,
-                   strict: bool = False, acc: dict[str, Any] | None = None) -> ScoreResult:
-    """Summary, per-sequence and per-joint rows, pooled histograms and issues from task results."""
+                   strict: bool = False, acc: dict[str, Any] | None = None, jobs: int = 1,
+                   progress: bool = False) -> ScoreResult:
+    """Summary, per-sequence and per-joint rows, pooled histograms and issues from task results.
+
+    With ``bootstrap``, the families' resampled statistics run on ``jobs`` threads; ``progress`` shows a
+    bar of them (with an ETA)."""
     if acc is None:
         folder = _Folder(setup, plan.reference, keep=True)
         for i, res in enumerate(results):
@@ -245,6 +250,8 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]],
     info = {name: mi for name, (_, mi) in metric_index({f.name: f for f in setup.family_objects}).items()}
     out = ScoreResult([], [], [], [], issues, errors, all_fps[0], {}, {}, plan, setup, conv, bootstrap, seed)
     ref = records[plan.reference]
+    work = sum(f.bootstrap_work(setup) for f in setup.active()) * bootstrap * len(plan.conditions)
+    bar = tqdm(total=work, desc="bootstrap", unit="resample", disable=not (progress and work), leave=False)
     for ci_, cond in enumerate(plan.conditions):
         recs = records[cond]
         names = sorted(s for s in recs if s in ref)
@@ -253,14 +260,17 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]],
             continue
         weights = bootstrap_weights(len(names), bootstrap, seed, ci_) if bootstrap else None
         ctx = ReduceContext(cond, plan.reference, names, recs, ref, setup, conv, weights, acc.get(cond, {}),
-                            info=info, seed=seed)
+                            info=info, seed=seed, threads=jobs, progress=bar.update)
         for family in setup.active():
             family.reduce(ctx)
+        bar.n = min(work, (ci_ + 1) * work // len(plan.conditions))  # a family that skipped its share
+        bar.refresh()
         out.summary += ctx.summary
         out.per_sequence += ctx.per_sequence
         out.per_joint += ctx.per_joint
         out.histograms += ctx.histograms
         issues += ctx.issues
+    bar.close()
     out.files = {c: {s: {"path": r["path"], "sha256": r["sha256"], "n_frames": r["n_frames"]}
                      for s, r in sorted(records[c].items())} for c in plan.conditions}
     out.wrist_tracks = {c: [records[c][s]["wrist_track"] for s in sorted(records[c])
@@ -302,7 +312,8 @@ def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | path
     folder = _Folder(setup, plan.reference, keep=bool(bootstrap))
     results = run(score_sequence, tasks, jobs=jobs, dask_address=dask_address, progress=progress,
                   weights=weights, desc="scoring", consume=folder, describe=_describe_task)
-    return reduce_results(plan, setup, results, bootstrap=bootstrap, seed=seed, strict=strict, acc=folder.acc)
+    return reduce_results(plan, setup, results, bootstrap=bootstrap, seed=seed, strict=strict, acc=folder.acc,
+                          jobs=jobs, progress=progress)
 
 
 def _describe_task(task: tuple[Any, ...]) -> str:

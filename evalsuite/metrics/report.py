@@ -151,8 +151,9 @@ def provenance(result: ScoreResult) -> dict[str, Any]:
         "metrics": setup.metrics,
         "histogram_edges": {q: e for q, e in setup.edges.items()},
         "beat_sigma_s": setup.sigma,
-        "bootstrap": {"resamples": result.bootstrap, "seed": result.seed, "unit": "sequences",
-                      "interval": "percentile 2.5-97.5"},
+        "bootstrap": {"resamples": result.bootstrap, "seed": result.seed, "unit": "sequences (paired)",
+                      "interval": "percentile 2.5-97.5; Fréchet distances (fd_g, fd_k, fgd): moved to have the "
+                                  "resamples' median on the estimate, bias in bootstrap_bias"},
         "files": result.files,
     }
 

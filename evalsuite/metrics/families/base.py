@@ -20,8 +20,8 @@ import numpy as np
 
 from evalsuite.metrics.conventions import Convention
 
-__all__ = ["MetricInfo", "MetricFamily", "SequenceContext", "ReduceContext", "percentile_ci",
-           "weighted_mean_boot", "bootstrap_weights"]
+__all__ = ["MetricInfo", "MetricFamily", "SequenceContext", "ReduceContext", "percentile_ci", "centred_ci",
+           "bootstrap_bias", "weighted_mean_boot", "bootstrap_weights"]
 
 NAN = float("nan")
 T = TypeVar("T")
@@ -63,6 +63,11 @@ class MetricFamily:
 
     def reduce(self, ctx: ReduceContext) -> None:
         """Add this family's rows for one condition."""
+
+    def bootstrap_work(self, setup: Any) -> int:
+        """Costly resampled statistics per condition and resample (the bootstrap progress bar counts them;
+        :meth:`reduce` reports them with :meth:`ReduceContext.advance`); default 0."""
+        return 0
 
 
 class SequenceContext:
@@ -135,7 +140,8 @@ class ReduceContext:
 
     ``reference`` names the natural condition; ``names`` are the sequences scored in both, sorted;
     ``weights`` the bootstrap resampling weights over ``names`` (``(B, n)``) or None; ``seed`` the run's
-    bootstrap seed; ``acc`` what the families folded for this condition.
+    bootstrap seed; ``acc`` what the families folded for this condition; ``threads`` how many threads the
+    bootstrap may use; ``progress`` counts resamples done (:meth:`advance`).
     """
 
     cond: str
@@ -154,6 +160,13 @@ class ReduceContext:
     issues: list[str] = field(default_factory=list)
     info: dict[str, MetricInfo] = field(default_factory=dict)
     seed: int = 0
+    threads: int = 1
+    progress: Callable[[int], Any] | None = None
+
+    def advance(self, n: int) -> None:
+        """``n`` more resampled statistics are done (moves the bootstrap progress bar)."""
+        if self.progress is not None:
+            self.progress(n)
 
     @property
     def n_bootstrap(self) -> int:
@@ -226,6 +239,35 @@ def percentile_ci(samples: Any) -> tuple[float, float]:
     if s.size == 0:
         return NAN, NAN
     return float(np.percentile(s, 2.5)), float(np.percentile(s, 97.5))
+
+
+def centred_ci(estimate: float, samples: Any, floor: float | None = 0.0, level: float = 0.95) -> tuple[float, float]:
+    """The percentile interval (2.5-97.5 at ``level`` 0.95) moved so that the bootstrap median sits on
+    ``estimate``:
+
+        [estimate - (q50 - q2.5), estimate + (q97.5 - q50)]   (low end clipped at ``floor``)
+
+    i.e. the percentile interval corrected for the bootstrap's median bias ``q50 - estimate``. It keeps the
+    spread and skew of the resampled values and contains the estimate by construction, for statistics
+    whose resamples are biased away from the estimate (Fréchet distances: a resample's duplicate
+    sequences shrink its effective sample, and the distance's small-sample bias grows). NaNs if no
+    finite sample.
+    """
+    s = np.asarray(samples, dtype=np.float64)
+    s = s[np.isfinite(s)]
+    if s.size == 0 or not np.isfinite(estimate):
+        return NAN, NAN
+    alpha = 100 * (1 - level) / 2
+    lo, mid, hi = np.percentile(s, [alpha, 50.0, 100 - alpha])
+    low = float(estimate - (mid - lo))
+    return (low if floor is None else max(low, floor)), float(estimate + (hi - mid))
+
+
+def bootstrap_bias(estimate: float, samples: Any) -> float:
+    """Efron's bootstrap estimate of the bias: mean of the finite resampled values minus the estimate."""
+    s = np.asarray(samples, dtype=np.float64)
+    s = s[np.isfinite(s)]
+    return float(s.mean() - estimate) if s.size else NAN
 
 
 def weighted_mean_boot(w: np.ndarray | None, values: Any) -> np.ndarray:

@@ -7,10 +7,26 @@ from typing import Any
 
 import numpy as np
 
-from evalsuite.metrics.distribution import combine_moments, div_k_sequence, frechet_from_moments, l1div_parts, moments
-from evalsuite.metrics.families.base import MetricFamily, MetricInfo, ReduceContext, SequenceContext
+from evalsuite.metrics.distribution import (
+    bootstrap_frechet,
+    combine_moments,
+    div_k_sequence,
+    frechet_from_moments,
+    l1div_parts,
+    moments,
+)
+from evalsuite.metrics.families.base import (
+    NAN,
+    NAN_CI,
+    MetricFamily,
+    MetricInfo,
+    ReduceContext,
+    SequenceContext,
+    bootstrap_bias,
+    centred_ci,
+)
 from evalsuite.metrics.families.cca import cca_halves
-from evalsuite.metrics.frechet import FrechetWarning
+from evalsuite.metrics.frechet import FrechetWarning, sample_size_warnings
 
 __all__ = ["DistributionFamily", "FAMILY"]
 
@@ -20,7 +36,12 @@ _FD = {"fd_g": "pose_moments", "fd_k": "diff_moments"}
 class DistributionFamily(MetricFamily):
     """Per sequence: exact moments (count, mean, scatter) of the pose vectors and of their frame
     differences, the L1 sum and Div_k; per condition: Fréchet distances of the pooled moments against the
-    natural sequences paired with it (bootstrap over sequences), L1div pooled over frames, Div_k mean."""
+    natural sequences paired with it, L1div pooled over frames, Div_k mean.
+
+    Bootstrap: the sequence names are resampled, the same draw for the condition and its natural
+    counterparts (paired). The Fréchet distances' interval is :func:`centred_ci` (it contains the
+    estimate) with the bootstrap bias in the row's ``bootstrap_bias``; too small samples are reported
+    (:func:`~evalsuite.metrics.frechet.sample_size_warnings`)."""
 
     name = "distribution"
     metrics = (MetricInfo("fd_g", "units^2", "lower", description="Fréchet distance of pose vectors"),
@@ -50,23 +71,32 @@ class DistributionFamily(MetricFamily):
         for key in _FD.values():
             record.pop(key, None)
 
+    def bootstrap_work(self, setup: Any) -> int:
+        return sum(q in setup.metrics for q in _FD)
+
     def reduce(self, ctx: ReduceContext) -> None:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", FrechetWarning)
-            for q, key in _FD.items():
-                if not ctx.wants(q):
-                    continue
-                value = frechet_from_moments(ctx.acc["natural_" + key], ctx.acc[key])
-                pc = [ctx.recs[s].get(key) for s in ctx.names]
-                pr = [ctx.ref[s].get(key) for s in ctx.names]
-
-                def resampled(w: np.ndarray, pc: list[Any] = pc, pr: list[Any] = pr) -> list[float]:
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore", FrechetWarning)
-                        return [frechet_from_moments(combine_moments(pr, wb), combine_moments(pc, wb)) for wb in w]
-
-                ctx.add(q, value, n=ctx.n, ci=ctx.boot(resampled))
-        ctx.issues.extend(f"{ctx.cond}: {c.message}" for c in caught)
+        for q, key in _FD.items():
+            if not ctx.wants(q):
+                continue
+            nat, mine = ctx.acc["natural_" + key], ctx.acc[key]
+            with warnings.catch_warnings():  # sample_size_warnings below says it, once and with the reason
+                warnings.simplefilter("ignore", FrechetWarning)
+                value = frechet_from_moments(nat, mine)
+            if ctx.cond != ctx.reference:  # natural vs itself: 0 by construction, in every resample too
+                ctx.issues.extend(f"{ctx.cond}: {q}: {w}" for w in sample_size_warnings(
+                    (nat[0], mine[0]), len(nat[1]), (ctx.n, ctx.n), "frames" if q == "fd_g" else "frame differences"))
+            ci, bias = NAN_CI, NAN
+            if ctx.weights is not None:
+                if ctx.cond == ctx.reference:
+                    samples = np.zeros(ctx.n_bootstrap)
+                else:
+                    samples = bootstrap_frechet([ctx.ref[s][key] for s in ctx.names],
+                                                [ctx.recs[s][key] for s in ctx.names], ctx.weights,
+                                                threads=ctx.threads, progress=ctx.advance)
+                ci, bias = centred_ci(value, samples), bootstrap_bias(value, samples)
+            ctx.add(q, value, n=ctx.n, ci=ci)
+            if ctx.weights is not None:
+                ctx.summary[-1]["bootstrap_bias"] = bias
         if ctx.wants("l1div"):
             sums = np.array([ctx.recs[s]["l1_sum"] for s in ctx.names])
             frames = np.array([ctx.recs[s]["n_frames"] for s in ctx.names], dtype=np.float64)
