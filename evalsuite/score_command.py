@@ -54,7 +54,7 @@ def _fgd_family(model_path, raw: bool):
               help="Bootstrap resamples over sequences for 95% confidence intervals (0: none). Cost: mostly FD_g "
               "and FD_k, about 2.5 ms per resample, condition and distance at 249 pose dimensions (83 joints) on one "
               "core, growing with the cube of the dimensions; the resamples run on --jobs threads (1000 resamples of "
-              "9 conditions with 83 joints: about 45 s on 2 cores). A progress bar shows the resamples left.")
+              "9 conditions x 40 segments with 83 joints: about 40 s on 2 cores). A progress bar shows the resamples left.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the bootstrap.")
 @click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Local worker processes (and threads for the bootstrap).")
