@@ -96,6 +96,7 @@ def test_cli_train_info_check_score_end_to_end(tmp_path):
     r = runner.invoke(main, ["fgd", "score", str(model_path), str(nat_dir), str(gen_dir), "--bootstrap", "100",
                              "--codes", "8", "--format", "csv", "-o", str(tmp_path / "fgd.csv")])
     assert r.exit_code == 0, r.output
+    assert "warning: SYS_noisy: fgd: 8 sequence(s) on a side (fewer than 10)" in r.stderr  # the rule of `score`
     import pandas as pd
 
     table = pd.read_csv(tmp_path / "fgd.csv")
