@@ -81,7 +81,7 @@ def test_registered_families_and_unknown_names(toy_family):
 
 
 def test_unknown_metric_names_the_registered_families(folders):
-    with pytest.raises(InputError, match="expected families kinematics, histograms"):
+    with pytest.raises(InputError, match=r"expected a family \(kinematics, histograms"):
         score_folders(folders["natural"], [folders["jitter"]], metrics=["nonsense"], progress=False)
 
 
