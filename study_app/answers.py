@@ -71,7 +71,3 @@ def judge(study: Study, spec: dict, data: dict) -> Outcome:
     """What a validated answer means for the session (attention check, end reason, honeypot)."""
     return get_kind(spec["type"]).outcome(study, spec, data)
 
-
-def score_attention(study: Study, spec: dict, data: dict) -> bool | None:
-    """True/False for attention-check pages, None otherwise."""
-    return judge(study, spec, data).attention

@@ -91,14 +91,10 @@ def _playback_json(study: Study, ans, dump: dict, sessions: dict) -> dict | None
     return {"implausible": check.implausible, "not_requested": list(check.not_requested), "min_ms": check.min_ms}
 
 
-def raw_json(study: Study, dump: dict) -> str:
-    """Everything stored for the study: sessions (with platform ids), answers, events, plans."""
-    return "".join(raw_json_chunks(study, dump))
-
-
 def raw_json_chunks(study: Study, dump: dict) -> Iterator[str]:
-    """:func:`raw_json` in pieces: the interaction log is streamed from the database, one event at a
-    time, so that an export never holds every event in memory."""
+    """Everything stored for the study as JSON text in pieces: sessions (with platform ids), answers,
+    plans and events. The interaction log is streamed from the database, one event at a time, so that an
+    export never holds every event in memory."""
     def sess(s):
         return {"id": s.id, "participant": s.participant, "platform": s.platform,
                 "platform_data": s.platform_data, "plan": dump["plans"][s.plan_id].key if s.plan_id in dump["plans"] else None,

@@ -15,11 +15,12 @@ from functools import partial
 
 from flask import Blueprint, abort, current_app, jsonify, redirect, render_template, request, session, url_for
 
-from study_app.answers import n_slots, parse_events, parse_token
+from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
 from study_app.pages import get_kind
 from study_app.payload import PayloadError, parse_json_object
-from study_app.submission import validate_submission
+from study_app.storage import SubmitStatus
+from study_app.submission import parse_answer_body, validate_submission
 
 bp = Blueprint("participant", __name__)
 
@@ -236,41 +237,34 @@ def _json_body() -> dict:
 
 @bp.route("/s/<sid>/answer/<int:index>", methods=["POST"])
 def answer(sid, index):
+    """Store the answer to page ``index`` (the body: :mod:`study_app.submission`)."""
     _own(sid)
     study, store = _study(), _store()
     try:
-        body = _json_body()
-        extra = sorted(set(body) - {"token", "answer", "events", "client_rt_ms", "width"})
-        if extra:
-            raise PayloadError(f"unexpected field {extra[0]!r}")
-        token = parse_token(body.get("token"))
-        client_rt = body.get("client_rt_ms")
-        if client_rt is not None and (isinstance(client_rt, bool) or not isinstance(client_rt, int)
-                                      or not 0 <= client_rt <= 10**9):
-            raise PayloadError("client_rt_ms: expected a non-negative integer")
+        body = parse_answer_body(_json_body())
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
 
     try:
-        status, ans, sess = store.submit(sid, index, token, partial(validate_submission, study, index, body))
+        status, ans, sess = store.submit(sid, index, body.token, partial(validate_submission, study, index, body))
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
-    if status == "missing":
+    if status is SubmitStatus.MISSING:
         return jsonify(error="this session does not exist (any more); open the study link again"), 404
     nxt = url_for("participant.page", sid=sid)
-    if status == "full":
+    if status is SubmitStatus.FULL:
         return jsonify(error="All places in this study are taken at the moment. Please return the task and "
                        "try again later.", next=nxt), 409
-    if status == "ahead":
+    if status is SubmitStatus.AHEAD:
         return jsonify(error="this page is not open yet; answer the current page first", next=nxt), 409
-    if status == "conflict":
+    if status is SubmitStatus.CONFLICT:
         return jsonify(error="this page was already answered; the stored answer is kept",
                        next=nxt), 409
     extra = {}
     if ans is not None and ans.events_dropped:
         extra["events_dropped"] = ans.events_dropped
         extra["warning"] = _cap_message(_store().rules)
-    return jsonify(status=status, next=nxt, session_status=sess.status, **extra)
+    return jsonify(status=status.value, next=nxt, session_status=sess.status, **extra)
 
 
 def _cap_message(rules, which: str = "") -> str:

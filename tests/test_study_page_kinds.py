@@ -1,6 +1,6 @@
 """The page-kind registry: a rating kind defined in this test (module, template, no other edits) works end
 to end — a definition using it builds, a participant's page renders it, an answer is validated and stored,
-the session moves on, and the export has its rows. Also the pure session policy."""
+the session moves on, and the export has its rows."""
 from __future__ import annotations
 
 import csv
@@ -12,10 +12,9 @@ import study_helpers as h
 
 from study_app import create_app
 from study_app.context import store_of
-from study_app.pages import BlockKind, Media, Outcome, page_kinds, register_page_kind, unregister_page_kind
+from study_app.pages import BlockKind, Media, page_kinds, register_page_kind, unregister_page_kind
 from study_app.pages.base import check_cols, export_condition, segment_for
-from study_app.payload import PayloadError, int_in, only_keys
-from study_app.policy import Rules, SessionState, after_answer
+from study_app.payload import int_in, only_keys
 
 TOY_YAML = """\
 id: toy-study
@@ -127,35 +126,3 @@ def test_unknown_page_types_name_the_registered_kinds(tmp_path):
     with pytest.raises(StudyDefinitionError, match="pages\\[0\\].type.*expected one of consent"):
         h.make_study(tmp_path, yaml_text=TOY_YAML, name="toy.yaml")
     assert "intensity" not in page_kinds()
-
-
-def _pages(*types):
-    return [{"type": t} for t in types]
-
-
-def test_policy_moves_to_the_next_page_and_finishes_on_the_last_kind():
-    rules = Rules(max_failed_attention_checks=2)
-    pages = _pages("consent", "pairwise", "finish")
-    move = after_answer(SessionState(0), Outcome(), pages, rules)
-    assert (move.current_page, move.status) == (1, "active")
-    move = after_answer(SessionState(1), Outcome(attention=True), pages, rules)
-    assert (move.current_page, move.status, move.end_reason) == (2, "finished", "completed")
-    assert move.passed_checks == 1
-
-
-def test_policy_ends_sessions_for_the_documented_reasons():
-    rules = Rules(max_failed_attention_checks=2)
-    pages = _pages("consent", "pairwise", "pairwise", "finish")
-    honeypot = after_answer(SessionState(0), Outcome(honeypot=True), pages, rules)
-    assert (honeypot.status, honeypot.end_reason, honeypot.honeypot) == ("failed", "honeypot", True)
-    screening = after_answer(SessionState(0), Outcome(end_reason="headphone_check"), pages, rules)
-    assert (screening.status, screening.end_reason) == ("failed", "headphone_check")
-    once = after_answer(SessionState(1), Outcome(attention=False), pages, rules)
-    assert (once.status, once.failed_checks) == ("active", 1)
-    twice = after_answer(SessionState(2, failed_checks=1), Outcome(attention=False), pages, rules)
-    assert (twice.status, twice.end_reason) == ("failed", "attention_checks")
-
-
-def test_payload_errors_are_value_errors_with_the_field():
-    with pytest.raises(PayloadError, match="answer.energy: expected an integer in 1..3"):
-        int_in(True, 1, 3, "answer.energy")

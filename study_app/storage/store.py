@@ -1,228 +1,34 @@
-"""Storage of plans, sessions, answers and interaction logs (SQLAlchemy 2.x).
-
-SQLite (WAL journal, ``synchronous=FULL``, every transaction ``BEGIN IMMEDIATE``) by default,
-PostgreSQL by URL. Guarantees:
-
-* an answer is committed before the server acknowledges it;
-* ``answers.submit_token`` is UNIQUE and ``(session_id, page_index)`` is UNIQUE: a retried or
-  double-clicked submission returns the first acknowledgement and creates nothing; a
-  different answer for an already answered page is refused, never written over it;
-* one session per participant per study (UNIQUE ``(study, participant)``);
-* plans are handed out with a reservation that expires and is re-released.
-"""
+"""The store: every database operation of the study app, each one transaction (the guarantees they keep
+are listed in :mod:`study_app.storage`)."""
 from __future__ import annotations
 
 import datetime as dt
+import enum
 import secrets
 import time
 
-from sqlalchemy import (
-    JSON,
-    Boolean,
-    DateTime,
-    Float,
-    ForeignKey,
-    Integer,
-    String,
-    Text,
-    UniqueConstraint,
-    create_engine,
-    event,
-    func,
-    select,
-)
-from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
-from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
+from sqlalchemy import func, select
+from sqlalchemy.exc import IntegrityError, OperationalError
+from sqlalchemy.orm import sessionmaker
 
-from study_app.design import plans_digest
 from study_app.errors import StudyStateError
 from study_app.media_log import MediaLog
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
+from study_app.storage.events import EventLog, add_events, slots_with
+from study_app.storage.tables import Answer, Entry, Event, MediaRequest, PageView, ParticipantSession, Plan, utcnow
 
-PLAYBACK_KINDS = ("play", "ended")     # the events the server's playback check reads
-
-
-def utcnow() -> dt.datetime:
-    return dt.datetime.now(dt.timezone.utc).replace(tzinfo=None)
+__all__ = ["Store", "SubmitStatus"]
 
 
-class Base(DeclarativeBase):
-    pass
+class SubmitStatus(str, enum.Enum):
+    """What :meth:`Store.submit` did with an answer (the value is what the answer endpoint reports)."""
 
-
-class StudyRecord(Base):
-    __tablename__ = "studies"
-    id: Mapped[str] = mapped_column(String(64), primary_key=True)
-    plans_sha256: Mapped[str] = mapped_column(String(64))
-    created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
-
-
-class Plan(Base):
-    __tablename__ = "plans"
-    __table_args__ = (UniqueConstraint("study", "key"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
-    study: Mapped[str] = mapped_column(String(64), index=True)
-    key: Mapped[str] = mapped_column(String(64))
-    position: Mapped[int] = mapped_column(Integer)
-    pages: Mapped[list] = mapped_column(JSON)
-    status: Mapped[str] = mapped_column(String(16), default="free", index=True)  # free/reserved/used
-    session_id: Mapped[str | None] = mapped_column(String(64), nullable=True)
-    reserved_until: Mapped[dt.datetime | None] = mapped_column(DateTime, nullable=True)
-    times_released: Mapped[int] = mapped_column(Integer, default=0)
-
-
-class ParticipantSession(Base):
-    __tablename__ = "sessions"
-    __table_args__ = (UniqueConstraint("study", "participant"),)
-    id: Mapped[str] = mapped_column(String(64), primary_key=True)
-    study: Mapped[str] = mapped_column(String(64), index=True)
-    participant: Mapped[str] = mapped_column(String(128))
-    platform: Mapped[str] = mapped_column(String(16))
-    platform_data: Mapped[dict] = mapped_column(JSON, default=dict)
-    plan_id: Mapped[int | None] = mapped_column(ForeignKey("plans.id"), nullable=True)
-    status: Mapped[str] = mapped_column(String(16), default="active")  # active/finished/failed/expired
-    end_reason: Mapped[str] = mapped_column(String(32), default="")
-    current_page: Mapped[int] = mapped_column(Integer, default=0)
-    failed_checks: Mapped[int] = mapped_column(Integer, default=0)
-    passed_checks: Mapped[int] = mapped_column(Integer, default=0)
-    honeypot: Mapped[bool] = mapped_column(Boolean, default=False)
-    user_agent: Mapped[str] = mapped_column(Text, default="")
-    created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
-    updated_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
-    finished_at: Mapped[dt.datetime | None] = mapped_column(DateTime, nullable=True)
-
-
-class Answer(Base):
-    __tablename__ = "answers"
-    __table_args__ = (UniqueConstraint("session_id", "page_index"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
-    submit_token: Mapped[str] = mapped_column(String(64), unique=True)
-    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
-    page_index: Mapped[int] = mapped_column(Integer)
-    page_id: Mapped[str] = mapped_column(String(128))
-    data: Mapped[dict] = mapped_column(JSON)
-    attention_passed: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
-    shown_at: Mapped[dt.datetime] = mapped_column(DateTime)
-    answered_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
-    rt_ms: Mapped[int] = mapped_column(Integer)
-    client_rt_ms: Mapped[int | None] = mapped_column(Integer, nullable=True)
-    events_dropped = 0      # not stored: new events of this answer the caps left out (told to the client)
-
-
-class PageView(Base):
-    """First time a page was shown (response times) and the autosaved draft of its answer."""
-    __tablename__ = "page_views"
-    __table_args__ = (UniqueConstraint("session_id", "page_index"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
-    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
-    page_index: Mapped[int] = mapped_column(Integer)
-    shown_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
-    draft: Mapped[dict | None] = mapped_column(JSON, nullable=True)
-    draft_at: Mapped[dt.datetime | None] = mapped_column(DateTime, nullable=True)
-
-
-class Event(Base):
-    """Interaction log: play/pause/seek/ended/choice events with media and client times."""
-    __tablename__ = "events"
-    __table_args__ = (UniqueConstraint("session_id", "client_id"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
-    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
-    client_id: Mapped[str] = mapped_column(String(64))
-    page_index: Mapped[int] = mapped_column(Integer)
-    kind: Mapped[str] = mapped_column(String(16))
-    slot: Mapped[int | None] = mapped_column(Integer, nullable=True)
-    media_time: Mapped[float | None] = mapped_column(Float, nullable=True)
-    client_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
-    detail: Mapped[str] = mapped_column(String(200), default="")
-    server_time: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
-
-
-class MediaRequest(Base):
-    """A media slot of a page that the session fetched from the server (first time): the server's own
-    evidence of playback (:mod:`study_app.playback`)."""
-    __tablename__ = "media_requests"
-    __table_args__ = (UniqueConstraint("session_id", "page_index", "slot"),)
-    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
-    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
-    page_index: Mapped[int] = mapped_column(Integer)
-    slot: Mapped[int] = mapped_column(Integer)
-    first_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
-
-
-class Entry(Base):
-    """A session created from a client address (a keyed hash of it, never the address itself): the limit
-    on new sessions per address counts these."""
-    __tablename__ = "session_entries"
-    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
-    study: Mapped[str] = mapped_column(String(64), index=True)
-    address: Mapped[str] = mapped_column(String(64), index=True)
-    session_id: Mapped[str] = mapped_column(String(64))
-    created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow, index=True)
-
-
-# ------------------------------------------------------------------------------- engine
-
-def make_engine(url: str):
-    """Engine for ``url``; SQLite gets WAL, full fsync, a busy timeout and BEGIN IMMEDIATE."""
-    if url.startswith("sqlite"):
-        engine = create_engine(url, connect_args={"timeout": 60, "check_same_thread": False})
-
-        @event.listens_for(engine, "connect")
-        def _sqlite_connect(dbapi_conn, _record):
-            # Let SQLAlchemy's "begin" hook start transactions (pysqlite's own BEGIN is deferred,
-            # which turns read-then-write transactions into SQLITE_BUSY under concurrency).
-            dbapi_conn.isolation_level = None
-            cur = dbapi_conn.cursor()
-            cur.execute("PRAGMA journal_mode=WAL")
-            cur.execute("PRAGMA synchronous=FULL")
-            cur.execute("PRAGMA busy_timeout=60000")
-            cur.execute("PRAGMA foreign_keys=ON")
-            cur.close()
-
-        @event.listens_for(engine, "begin")
-        def _sqlite_begin(conn):
-            # Writers queue for the lock up front; read-only work (video requests, exports)
-            # takes no lock at all under WAL.
-            readonly = conn.get_execution_options().get("evalsuite_readonly")
-            conn.exec_driver_sql("BEGIN" if readonly else "BEGIN IMMEDIATE")
-    else:
-        engine = create_engine(url, pool_pre_ping=True, pool_size=5, max_overflow=10)
-    return engine
-
-
-def init_db(engine, study, plans: dict):
-    """Create tables (if missing) and store the study's plans once.
-
-    Refuses a database whose plans for this study differ from ``plans`` (changing plans in
-    the middle of a study would break the balance and the meaning of stored answers).
-    """
-    for attempt in range(5):
-        try:
-            Base.metadata.create_all(engine)
-            break
-        except (OperationalError, IntegrityError, ProgrammingError):
-            # Several workers starting at once may race on CREATE TABLE; the loser retries.
-            if attempt == 4:
-                raise
-            time.sleep(0.2 * (attempt + 1))
-    digest = plans_digest(plans)
-    Session = sessionmaker(engine)
-    for attempt in range(5):
-        try:
-            with Session.begin() as db:
-                rec = db.get(StudyRecord, study.id)
-                if rec is not None:
-                    if rec.plans_sha256 != digest:
-                        raise StudyStateError(
-                            f"the database already holds different session plans for study "
-                            f"{study.id!r}; use a new database or a new study id", field="plans")
-                    return
-                db.add(StudyRecord(id=study.id, plans_sha256=digest))
-                for i, plan in enumerate(plans["plans"]):
-                    db.add(Plan(study=study.id, key=plan["key"], position=i, pages=plan["pages"]))
-            return
-        except IntegrityError:
-            time.sleep(0.2 * (attempt + 1))
+    STORED = "stored"          # stored now
+    DUPLICATE = "duplicate"    # this token was seen before: the first answer is returned
+    AHEAD = "ahead"            # a page after the session's current one
+    MISSING = "missing"        # no such session
+    CONFLICT = "conflict"      # the page already has a different answer, or is not the current page
+    FULL = "full"              # a session without a plan answered its first page and no plan is free
 
 
 def _plan(db, sess: ParticipantSession) -> Plan:
@@ -415,55 +221,15 @@ class Store:
             view.draft, view.draft_at = draft, utcnow()
             return True
 
-    def add_events(self, db, session_id: str, page_index: int, events: list[dict]) -> tuple[int, str]:
-        """Store the events not seen before, up to the caps (:class:`~study_app.policy.Rules`
-        ``events_per_page`` and ``events_per_session``, each for playback events and for the others);
-        returns how many new events the caps dropped and which cap (``"page"``/``"session"``, else "")."""
-        if not events:
-            return 0, ""
-        ids = [e["id"] for e in events]
-        known = set(db.scalars(select(Event.client_id).where(Event.session_id == session_id,
-                                                             Event.client_id.in_(ids))))
-        new = []
-        for e in events:
-            if e["id"] in known:
-                continue  # a retried batch: the log keeps one copy of each event
-            known.add(e["id"])
-            new.append(e)
-        if not new:
-            return 0, ""
-        # Playback events (play, ended: what the server's playback check reads) and the rest are capped
-        # apart, so that a long slider drag can never crowd out the record that a video was played.
-        playback = Event.kind.in_(PLAYBACK_KINDS)
-        room, limit = {}, {}
-        for group, where in ((True, playback), (False, ~playback)):
-            counted = select(func.count(Event.id)).where(Event.session_id == session_id, where)
-            page_room = self.rules.events_per_page - db.scalar(counted.where(Event.page_index == page_index))
-            session_room = self.rules.events_per_session - db.scalar(counted)
-            room[group] = max(0, min(page_room, session_room))
-            limit[group] = "session" if session_room < page_room else "page"
-        dropped, which = 0, ""
-        for e in new:
-            group = e["kind"] in PLAYBACK_KINDS
-            if not room[group]:
-                dropped += 1
-                which = limit[group]
-                continue
-            room[group] -= 1
-            db.add(Event(session_id=session_id, client_id=e["id"], page_index=page_index,
-                         kind=e["kind"], slot=e.get("slot"), media_time=e.get("t"),
-                         client_ms=e.get("ms"), detail=e.get("detail", "")))
-        return dropped, which
-
     def log_events(self, session_id: str, page_index: int, events: list[dict]) -> tuple[int, str]:
-        """Store a batch of events (see :meth:`add_events`); returns how many the caps dropped, and which."""
+        """Store a batch of events (see :func:`study_app.storage.events.add_events`); returns how many the caps dropped, and which."""
         for _attempt in range(3):
             try:
                 with self.Session.begin() as db:
                     # The session row is the lock that keeps concurrent batches within the caps.
                     db.scalars(self._locked(select(ParticipantSession.id).where(
                         ParticipantSession.id == session_id))).first()
-                    return self.add_events(db, session_id, page_index, events)
+                    return add_events(db, self.rules, session_id, page_index, events)
             except IntegrityError:
                 continue
         raise RuntimeError("could not store the events")
@@ -473,21 +239,14 @@ class Store:
         waiting for the disk or, on SQLite, for the write lock)."""
         self.media_log.record(session_id, page_index, slot, utcnow())
 
-    def slots_with(self, db, session_id: str, page_index: int, kind: str) -> set[int]:
-        return set(db.scalars(select(Event.slot).where(
-            Event.session_id == session_id, Event.page_index == page_index,
-            Event.kind == kind)))
-
     def submit(self, session_id: str, page_index: int, token: str, validate):
         """Store the answer to page ``page_index`` once, idempotently.
 
         ``validate(pages, played)`` (see :func:`study_app.submission.validate_submission`) returns the
         :class:`~study_app.submission.Submission` or raises; ``played(kind)`` gives the media slots with an
         event of that kind on the page. The session then moves on as :func:`study_app.policy.after_answer`
-        says. Returns ``(status, answer, session)`` with status ``"stored"``, ``"duplicate"`` (same token
-        seen before: the first answer is returned), ``"ahead"`` (a page after the current one), ``"missing"``
-        (no such session), ``"conflict"`` (this page already has a different answer / is not the current
-        page) or ``"full"`` (a session without a plan answered its first page and no plan is free).
+        says. Returns ``(status, answer, session)`` with a :class:`SubmitStatus` (``answer`` is the stored
+        answer for STORED, the first one for DUPLICATE, else None; ``session`` is None for MISSING).
         """
         for attempt in range(3):
             try:
@@ -497,29 +256,29 @@ class Store:
                     sess = db.scalars(self._locked(select(ParticipantSession).where(
                         ParticipantSession.id == session_id))).first()
                     if sess is None:
-                        return "missing", None, None
+                        return SubmitStatus.MISSING, None, None
                     prior = db.scalars(select(Answer).where(Answer.submit_token == token)).first()
                     if prior is not None:
                         if prior.session_id != session_id or prior.page_index != page_index:
-                            return "conflict", None, sess
-                        return "duplicate", prior, sess
+                            return SubmitStatus.CONFLICT, None, sess
+                        return SubmitStatus.DUPLICATE, prior, sess
                     now = utcnow()
                     self._check_expiry(db, sess, now)
                     if sess.status == "active" and page_index > sess.current_page:
-                        return "ahead", None, sess
+                        return SubmitStatus.AHEAD, None, sess
                     if sess.status != "active" or sess.current_page != page_index:
-                        return "conflict", None, sess
+                        return SubmitStatus.CONFLICT, None, sess
                     if sess.plan_id is None:
                         # The participant really starts (answers the first page, e.g. gives consent): only
                         # now is a plan reserved. Rolled back with the answer if the answer is refused.
                         self.release_expired(db, sess.study, now)
                         free = self._free_plan(db, sess.study)
                         if free is None:
-                            return "full", None, sess
+                            return SubmitStatus.FULL, None, sess
                         self._reserve(db, sess, free, now)
                     plan = _plan(db, sess)
-                    sub = validate(plan.pages, lambda kind: self.slots_with(db, session_id, page_index, kind))
-                    dropped, _ = self.add_events(db, session_id, page_index, sub.events)
+                    sub = validate(plan.pages, lambda kind: slots_with(db, session_id, page_index, kind))
+                    dropped, _ = add_events(db, self.rules, session_id, page_index, sub.events)
                     view = db.scalars(select(PageView).where(PageView.session_id == session_id,
                                                              PageView.page_index == page_index)).first()
                     shown = view.shown_at if view else now
@@ -541,7 +300,7 @@ class Store:
                     else:
                         # Sliding reservation: an active participant keeps their plan.
                         plan.reserved_until = now + dt.timedelta(minutes=self.rules.reservation_minutes)
-                return "stored", answer, sess
+                return SubmitStatus.STORED, answer, sess
             except IntegrityError:
                 # A concurrent duplicate (same token, or same page) won the race: re-read.
                 continue
@@ -587,21 +346,5 @@ class Store:
                     .join(ParticipantSession, MediaRequest.session_id == ParticipantSession.id).where(of_study)):
                 requested.setdefault((sid, index), set()).add(slot)
             return {"sessions": sessions, "plans": plans, "answers": answers,
-                    "events": EventLog(self, study_id), "event_counts": counts, "media_requests": requested}
+                    "events": EventLog(self.ReadSession, study_id), "event_counts": counts, "media_requests": requested}
 
-
-class EventLog:
-    """A study's interaction log, read from the database in batches each time it is iterated (never all
-    rows at once)."""
-
-    def __init__(self, store: Store, study_id: str, batch: int = 2000):
-        self.store, self.study_id, self.batch = store, study_id, batch
-
-    def __iter__(self):
-        stmt = (select(Event).join(ParticipantSession, Event.session_id == ParticipantSession.id)
-                .where(ParticipantSession.study == self.study_id).order_by(Event.id)
-                .execution_options(yield_per=self.batch))
-        with self.store.ReadSession() as db:
-            for event in db.scalars(stmt):
-                yield event
-                db.expunge(event)
