@@ -9,6 +9,7 @@ import pytest
 from click.testing import CliRunner
 from scipy import stats
 
+from evalsuite.analysis import correlate as corr
 from evalsuite.analysis.correlate import COLUMNS, correlate, kendall_b_rows, rank_correlations, spearman_rows
 from evalsuite.analysis.correlate_boot import ParticipantResampler
 from evalsuite.analysis.correlate_io import read_human, read_scores
@@ -43,21 +44,34 @@ def tau_by_hand(x, y):
     return (nc - nd) / n0, (nc - nd) / math.sqrt((n0 - tx) * (n0 - ty))
 
 
+def p_by_enumeration(x, y, rows_statistic):
+    """Two-sided permutation p-value over every ordering of y, by hand: min(1, 2 min(P(T* >= T), P(T* <= T)))."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    perms = np.array(list(itertools.permutations(range(len(y)))))
+    null = rows_statistic(np.broadcast_to(x, perms.shape), y[perms])
+    t = rows_statistic(x[None], y[None])[0]
+    return min(1.0, 2 * min((null >= t - 1e-9).mean(), (null <= t + 1e-9).mean()))
+
+
 # --- point estimates and p-values ----------------------------------------------------------------
 
 TIED_X = [1.0, 2.0, 2.0, 3.0, 4.0, 4.0, 5.0, 6.0]
 TIED_Y = [10.0, 20.0, 20.0, 20.0, 40.0, 30.0, 40.0, 50.0]
 
 
-def test_point_estimates_and_p_values_are_scipys_with_ties():
+def test_point_estimates_are_scipys_and_p_values_exact_with_ties():
     t = correlate(scores_frame(TIED_X), human_frame(TIED_Y), n_boot=0)
     assert len(t) == 1 and list(t.columns) == COLUMNS
     r = t.iloc[0]
     s = stats.spearmanr(TIED_X, TIED_Y)
     k = stats.kendalltau(TIED_X, TIED_Y, variant="b")
-    assert r.n == 8
-    assert r.spearman_rho == s.statistic and r.spearman_p == s.pvalue
-    assert r.kendall_tau_b == k.statistic and r.kendall_p == k.pvalue
+    assert r.n == 8 == corr.EXACT_MAX_N
+    assert r.spearman_rho == s.statistic and r.kendall_tau_b == k.statistic
+    # p over all 8! orderings, ties kept (scipy's defaults would give the t / normal approximations)
+    assert r.spearman_p == pytest.approx(p_by_enumeration(TIED_X, TIED_Y, spearman_rows), rel=1e-9)
+    assert r.kendall_p == pytest.approx(p_by_enumeration(TIED_X, TIED_Y, kendall_b_rows), rel=1e-9)
+    assert r.spearman_p != pytest.approx(s.pvalue, rel=0.1) and r.kendall_p != pytest.approx(k.pvalue, rel=0.1)
+    assert r.spearman_p_method == r.kendall_p_method == "exact"
     # tau-b, not tau-a: with ties they differ, and the table has tau-b
     tau_a, tau_b = tau_by_hand(TIED_X, TIED_Y)
     assert abs(tau_a - tau_b) > 0.05
@@ -67,11 +81,31 @@ def test_point_estimates_and_p_values_are_scipys_with_ties():
     assert r.spearman_rho == pytest.approx(np.corrcoef(stats.rankdata(TIED_X), stats.rankdata(TIED_Y))[0, 1])
 
 
-def test_rank_correlations_without_ties_use_scipys_exact_kendall_p():
+def test_rank_correlations_without_ties_use_exact_p_values():
     x, y = [3.0, 1.0, 4.0, 1.5, 5.0, 9.0, 2.0], [2.0, 1.0, 3.0, 5.0, 4.0, 7.0, 6.0]
     rho, p_rho, tau, p_tau = rank_correlations(x, y)
-    assert (rho, p_rho) == tuple(stats.spearmanr(x, y))
+    assert rho == stats.spearmanr(x, y).statistic
+    assert p_rho == pytest.approx(p_by_enumeration(x, y, spearman_rows), rel=1e-9)
     assert (tau, p_tau) == tuple(stats.kendalltau(x, y, variant="b", method="exact"))
+    assert p_tau == pytest.approx(p_by_enumeration(x, y, kendall_b_rows), rel=1e-9)
+
+
+def test_four_conditions_in_perfect_order_are_not_significant():
+    """The issue: n = 4, rho = 1 was reported as p < 0.0001 (t approximation); exactly, 2 of the 24 orderings
+    are as extreme, p = 1/12."""
+    assert stats.spearmanr([1, 2, 3, 4], [1, 2, 3, 4]).pvalue < 1e-4
+    assert corr.rank_p_values([1, 2, 3, 4], [10, 20, 30, 40]) == pytest.approx((1 / 12, "exact", 1 / 12, "exact"))
+    assert corr.rank_p_values([1, 2, 3, 4], [40, 30, 20, 10])[0] == pytest.approx(1 / 12)
+
+
+def test_above_the_threshold_p_values_are_scipys_approximations():
+    x = np.arange(corr.EXACT_MAX_N + 1, dtype=float)
+    y = np.array([2, 1, 4, 3, 6, 5, 8, 9, 7], dtype=float)
+    p_rho, m_rho, p_tau, m_tau = corr.rank_p_values(x, y)
+    assert (p_rho, m_rho) == (stats.spearmanr(x, y).pvalue, "t approximation")
+    assert (p_tau, m_tau) == (stats.kendalltau(x, y, method="exact").pvalue, "exact")  # no ties: exact to n = 33
+    y[0] = y[1]  # a tie: tau-b's exact distribution is scipy's only without ties
+    assert corr.rank_p_values(x, y)[2:] == (stats.kendalltau(x, y, method="asymptotic").pvalue, "normal approximation")
 
 
 def test_vectorised_replicates_equal_scipy_row_by_row():
@@ -274,7 +308,8 @@ def test_cli_writes_every_output_from_real_score_and_analyze(real, tmp_path):
     y = h.set_index("condition")["median"].astype(float)[STUDY]
     row = table[(table.metric == "ape") & (table.measure == "median")].iloc[0]
     assert row.spearman_rho == pytest.approx(stats.spearmanr(x, y).statistic, abs=1e-15)
-    assert row.kendall_p == pytest.approx(stats.kendalltau(x, y).pvalue, abs=1e-15)
+    assert row.kendall_p == pytest.approx(p_by_enumeration(x, y, kendall_b_rows), abs=1e-12)
+    assert row.spearman_p_method == row.kendall_p_method == "exact" and "| p from |" in (out / "correlations.md").read_text()
     assert row.conditions == ";".join(STUDY) and row.n == 5 and row.better == "lower"
     assert np.isfinite(row.spearman_ci_low_participants) and np.isfinite(row.kendall_ci_high_participants)
     assert "median (hl_rating)" in r.output and "Wrote" in r.output
@@ -328,10 +363,38 @@ def test_cli_published_numbers_and_help(tmp_path):
     assert r.exit_code == 0, r.output
     row = pd.read_csv(tmp_path / "o" / "correlations.csv").iloc[0]
     assert row.metric == "fgd" and row.human_measure == "human" and row.spearman_rho == -1.0 and bool(row.agrees)
+    assert row.spearman_p == pytest.approx(1 / 12) and row.spearman_p_method == "exact"
+    md = (tmp_path / "o" / "correlations.md").read_text()
+    assert "0.0833" in md and "<0.0001" not in md and "exact" in md
     assert (tmp_path / "o" / "figures" / "scatter_fgd.png").is_file()
     r = invoke("correlate", "--help")
     assert r.exit_code == 0 and "Example:" in r.output and "evalsuite correlate scores/summary.csv" in r.output
     assert "correlate" in invoke("--help").output
+
+
+def test_cli_groups_notes_by_kind_and_writes_them_all(tmp_path):
+    rows = ["condition,metric,value"]
+    for i in range(10):  # ten metrics constant across the conditions, one without a value for D
+        rows += [f"{c},flat{i},1.0" for c in "ABCD"]
+    rows += ["A,gappy,1", "B,gappy,2", "C,gappy,3", "A,ok,1", "B,ok,2", "C,ok,3", "D,ok,4"]
+    scores = tmp_path / "scores.csv"
+    scores.write_text("\n".join(rows) + "\n")
+    human = tmp_path / "human.csv"
+    human.write_text("condition,value\nA,3.9\nB,3.0\nC,4.2\nD,2.5\n")
+    r = invoke("correlate", scores, human, "-o", tmp_path / "o", "--bootstrap", "0", "--no-figures")
+    assert r.exit_code == 0, r.output
+    lines = [ln for ln in r.output.splitlines() if ln.startswith("note:")]
+    assert len(lines) == 2
+    assert lines[0].startswith("note: metric constant (10 rows): flat0 / human: metric constant") and "and 7 more" in lines[0]
+    assert lines[1].startswith("note: no value for some conditions (1 row): gappy / human: no value for D")
+    notes = pd.read_csv(tmp_path / "o" / "notes.csv")
+    assert list(notes.columns) == ["kind", "metric", "human_measure", "note"] and len(notes) == 11
+    assert f"All 11 notes: {tmp_path / 'o' / 'notes.csv'}" in r.output
+    r = invoke("correlate", scores, human, "-o", tmp_path / "o", "--bootstrap", "0", "--no-figures", "--verbose")
+    assert sum(ln.startswith("note: flat") for ln in r.output.splitlines()) == 10
+    # a later run without notes leaves no stale notes.csv behind
+    r = invoke("correlate", scores, human, "-o", tmp_path / "o", "--metric", "ok", "--bootstrap", "0", "--no-figures")
+    assert r.exit_code == 0 and "note:" not in r.output and not (tmp_path / "o" / "notes.csv").exists()
 
 
 # --- the analysis report --------------------------------------------------------------------------

@@ -5,9 +5,9 @@ and every human measure (a ``condition, value`` per question and measure: MUSHRA
 Likert means, Elo, pairwise win rates; see :mod:`evalsuite.analysis.correlate_io`), over the
 conditions both have:
 
-- Spearman's rho and Kendall's tau-b with their p-values, exactly ``scipy.stats.spearmanr(x, y)`` and
-  ``scipy.stats.kendalltau(x, y, variant="b")`` (tau-b corrects for ties; scipy's default method:
-  exact null distribution for small samples without ties, normal approximation otherwise);
+- Spearman's rho and Kendall's tau-b, exactly ``scipy.stats.spearmanr(x, y)`` and
+  ``scipy.stats.kendalltau(x, y, variant="b")`` (tau-b corrects for ties), with two-sided p-values that are
+  exact for small n (:func:`rank_p_values`; ``spearman_p_method`` / ``kendall_p_method`` say which);
 - percentile bootstrap CIs from ``n_boot`` resamples of the **conditions** with replacement (seeded;
   resamples in which either side is constant have no correlation and are left out, the row says how
   many);
@@ -32,26 +32,66 @@ from scipy import stats
 
 from evalsuite.errors import InputError
 
-__all__ = ["COLUMNS", "correlate", "rank_correlations", "spearman_rows", "kendall_b_rows", "metric_direction",
-           "add_distance_to_natural"]
+__all__ = ["COLUMNS", "EXACT_MAX_N", "correlate", "rank_correlations", "rank_p_values", "spearman_rows",
+           "kendall_b_rows", "metric_direction", "add_distance_to_natural"]
 
 COLUMNS = ["metric", "human_measure", "n", "spearman_rho", "spearman_p", "spearman_ci_low", "spearman_ci_high",
            "kendall_tau_b", "kendall_p", "kendall_ci_low", "kendall_ci_high", "question", "measure", "better",
            "agrees", "spearman_ci_low_participants", "spearman_ci_high_participants",
-           "kendall_ci_low_participants", "kendall_ci_high_participants", "conditions", "note"]
+           "kendall_ci_low_participants", "kendall_ci_high_participants", "conditions", "note",
+           "spearman_p_method", "kendall_p_method"]
 MIN_CONDITIONS = 3
+EXACT_MAX_N = 8  # every one of the n! orderings is enumerated up to here (8! = 40,320; 9! takes seconds a row)
+EXACT, T_APPROX, NORMAL_APPROX = "exact", "t approximation", "normal approximation"
 _CHUNK = 256
 
 
 def rank_correlations(x, y) -> tuple[float, float, float, float]:
     """``(rho, p_rho, tau_b, p_tau)``: ``scipy.stats.spearmanr`` and ``kendalltau(variant="b")`` of two
-    equally long vectors; all NaN when either is constant (no rank correlation exists)."""
+    equally long vectors, with the p-values of :func:`rank_p_values`; all NaN when either is constant (no
+    rank correlation exists)."""
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     if x.size < 2 or np.all(x == x[0]) or np.all(y == y[0]):
         return (math.nan,) * 4
-    s = stats.spearmanr(x, y)
-    k = stats.kendalltau(x, y, variant="b")
-    return float(s.statistic), float(s.pvalue), float(k.statistic), float(k.pvalue)
+    p_rho, _, p_tau, _ = rank_p_values(x, y)
+    return float(stats.spearmanr(x, y).statistic), p_rho, float(stats.kendalltau(x, y, variant="b").statistic), p_tau
+
+
+def rank_p_values(x, y) -> tuple[float, str, float, str]:
+    """Two-sided p-values of Spearman's rho and Kendall's tau-b and how each was computed:
+    ``(p_rho, method, p_tau, method)``, ``x``, ``y`` of shape ``(n,)``, neither constant.
+
+    - ``"exact"``, n <= :data:`EXACT_MAX_N`: the permutation distribution over all n! orderings of y
+      against x, ``p = min(1, 2 min(P(T* >= T), P(T* <= T)))`` (``scipy.stats.permutation_test((y,), ...,
+      permutation_type="pairings", n_resamples=inf)``; for rho, ``scipy.stats.pearsonr`` of the average ranks with
+      ``method=PermutationMethod(n_resamples=inf)``). Ties are kept, so this is exact with ties too;
+    - tau-b without ties up to n = 33 is also ``"exact"``: scipy's exact null distribution
+      (``kendalltau(method="exact")``);
+    - otherwise ``"t approximation"`` for rho (``t = rho sqrt((n - 2) / (1 - rho^2))``, n - 2 degrees of
+      freedom: ``spearmanr``) and ``"normal approximation"`` for tau-b (tie-corrected variance: ``kendalltau``).
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    n = x.size
+    ties = np.unique(x).size < n or np.unique(y).size < n
+    if n <= EXACT_MAX_N:
+        exhaustive = stats.PermutationMethod(n_resamples=np.inf)
+        p_rho = stats.pearsonr(stats.rankdata(x), stats.rankdata(y), method=exhaustive).pvalue
+        rho_method = EXACT
+    else:
+        p_rho, rho_method = stats.spearmanr(x, y).pvalue, T_APPROX
+    if not ties and n <= 33:
+        p_tau, tau_method = stats.kendalltau(x, y, variant="b", method="exact").pvalue, EXACT
+    elif n <= EXACT_MAX_N:
+        def tau_b(y_perm, axis=-1):  # y_perm: (..., n) orderings of y against the fixed x
+            rows = np.reshape(y_perm, (-1, n))
+            return kendall_b_rows(np.broadcast_to(x, rows.shape), rows).reshape(np.shape(y_perm)[:-1])
+
+        p_tau = stats.permutation_test((y,), tau_b, permutation_type="pairings", n_resamples=np.inf,
+                                       vectorized=True).pvalue
+        tau_method = EXACT
+    else:
+        p_tau, tau_method = stats.kendalltau(x, y, variant="b", method="asymptotic").pvalue, NORMAL_APPROX
+    return float(p_rho), rho_method, float(p_tau), tau_method
 
 
 def spearman_rows(X, Y) -> np.ndarray:
@@ -157,7 +197,8 @@ def check_conditions(score_conds, human_conds, scores_path=None, human_path=None
 
 def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, seed: int = 42,
               alpha: float = 0.05, participants=None, shared_only: bool = False, human_higher: bool = True,
-              notes: list | None = None, natural: str | None = None) -> pd.DataFrame:
+              notes: list | None = None, natural: str | None = None, row_notes: list | None = None
+              ) -> pd.DataFrame:
     """The ``correlations.csv`` table: one row per metric and human measure (module docstring).
 
     ``scores``: columns ``condition, metric, value`` (optional ``better``); ``human``: columns
@@ -165,7 +206,8 @@ def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, 
     :func:`~evalsuite.analysis.correlate_io.read_human`). Conditions must be the same in both (an
     :class:`InputError` names those that are not) unless ``shared_only``; at least 3 must be shared.
     ``participants``: optional resampler for participant-bootstrap CIs. Notes about the inputs (left-out
-    conditions) are appended to ``notes`` when given. ``natural``: see :func:`add_distance_to_natural`.
+    conditions) are appended to ``notes`` when given; the rows' notes to ``row_notes`` as ``(kind, metric,
+    human_measure, text)``. ``natural``: see :func:`add_distance_to_natural`.
     """
     scores, human = _normalise(scores, "scores"), _normalise(human, "human")
     if natural:
@@ -194,7 +236,8 @@ def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, 
             hvals = dict(zip(hg["condition"], hg["value"]))
             rows.append(_row(str(metric), str(question), str(measure), svals, hvals, shared, better,
                              n_boot=n_boot, seed=seed, alpha=alpha, participants=participants,
-                             human_higher=human_higher, source=human.attrs.get("source", "")))
+                             human_higher=human_higher, source=human.attrs.get("source", ""),
+                             row_notes=row_notes))
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
@@ -242,26 +285,31 @@ def human_label(question: str, measure: str) -> str:
 
 
 def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, seed, alpha, participants,
-         human_higher, source):
+         human_higher, source, row_notes=None):
     usable = [c for c in shared if c in svals and c in hvals
               and math.isfinite(svals[c]) and math.isfinite(hvals[c])]
     x = np.array([svals[c] for c in usable], dtype=float)
     y = np.array([hvals[c] for c in usable], dtype=float)
     row = {c: math.nan for c in COLUMNS}
     row.update(metric=metric, human_measure=human_label(question, measure), question=question, measure=measure,
-               n=len(usable), better=better, agrees=None, conditions=";".join(usable), note="")
-    notes = []
+               n=len(usable), better=better, agrees=None, conditions=";".join(usable), note="",
+               spearman_p_method="", kendall_p_method="")
+    notes: list[tuple[str, str]] = []  # (kind, text)
     if len(usable) < len(shared):
-        notes.append(f"no value for {', '.join(c for c in shared if c not in usable)}")
+        missing = ", ".join(c for c in shared if c not in usable)
+        notes.append(("no value for some conditions", f"no value for {missing}"))
     if len(usable) < MIN_CONDITIONS:
-        notes.append(f"{len(usable)} condition(s) with values: a rank correlation needs {MIN_CONDITIONS}")
+        notes.append(("too few conditions", f"{len(usable)} condition(s) with values: a rank correlation needs "
+                                            f"{MIN_CONDITIONS}"))
     elif np.all(x == x[0]):
-        notes.append("metric constant across conditions: rho and tau undefined")
+        notes.append(("metric constant", "metric constant across conditions: rho and tau undefined"))
     elif np.all(y == y[0]):
-        notes.append("human measure constant across conditions: rho and tau undefined")
+        notes.append(("human measure constant", "human measure constant across conditions: rho and tau undefined"))
     else:
-        rho, p_rho, tau, p_tau = rank_correlations(x, y)
+        rho, tau = float(stats.spearmanr(x, y).statistic), float(stats.kendalltau(x, y, variant="b").statistic)
+        p_rho, rho_method, p_tau, tau_method = rank_p_values(x, y)
         row.update(spearman_rho=rho, spearman_p=p_rho, kendall_tau_b=tau, kendall_p=p_tau,
+                   spearman_p_method=rho_method, kendall_p_method=tau_method,
                    agrees=_agrees(rho, better, human_higher))
         if n_boot > 0:
             lo, hi, tlo, thi, bad = condition_bootstrap(x, y, n_boot, seed, alpha)
@@ -269,11 +317,12 @@ def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, see
             _snap(row, "spearman_rho", "spearman_ci_low", "spearman_ci_high")
             _snap(row, "kendall_tau_b", "kendall_ci_low", "kendall_ci_high")
             if bad:
-                notes.append(f"{bad} of {n_boot} condition resamples constant (no correlation), left out")
+                notes.append(("constant condition resamples",
+                              f"{bad} of {n_boot} condition resamples constant (no correlation), left out"))
         if participants is not None and n_boot > 0:
             H = participants.replicates(source, question, measure, usable, n_boot, seed)
             if H is None:
-                notes.append(f"no participant bootstrap for {measure!r}")
+                notes.append(("no participant bootstrap", f"no participant bootstrap for {measure!r}"))
             else:
                 rr, tt = _replicates(np.broadcast_to(x, H.shape), H)
                 (row["spearman_ci_low_participants"], row["spearman_ci_high_participants"]) = _percentile(rr, alpha)
@@ -282,8 +331,11 @@ def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, see
                 _snap(row, "kendall_tau_b", "kendall_ci_low_participants", "kendall_ci_high_participants")
                 bad = int((~np.isfinite(rr)).sum())
                 if bad:
-                    notes.append(f"{bad} of {n_boot} participant resamples without a correlation, left out")
+                    notes.append(("participant resamples without a correlation",
+                                  f"{bad} of {n_boot} participant resamples without a correlation, left out"))
     if better == "closer to natural" and math.isfinite(row["spearman_rho"]):
-        notes.append("closer to natural is better: no expected sign")
-    row["note"] = "; ".join(notes)
+        notes.append(("no expected sign", "closer to natural is better: no expected sign"))
+    row["note"] = "; ".join(text for _, text in notes)
+    if row_notes is not None:
+        row_notes.extend((kind, metric, row["human_measure"], text) for kind, text in notes)
     return row

@@ -85,14 +85,18 @@ def check_against_results(human, resampler, results_path) -> None:
 @click.option("--mismatch-suffix", default=":mismatched", show_default=True,
               help="X vs X + this suffix is a matched-vs-mismatched comparison: left out of win rates.")
 @click.option("--no-figures", is_flag=True, help="Tables only.")
+@click.option("-v", "--verbose", is_flag=True,
+              help="Print every row's note; by default one line per kind of note (count and examples), all of "
+                   "them in OUT/notes.csv.")
 def correlate(scores, human, out_dir, measures, questions, metrics, results, n_boot, seed, alpha, renames, excluded,
-              shared_only, human_lower_better, natural, mismatch_suffix, no_figures):
+              shared_only, human_lower_better, natural, mismatch_suffix, no_figures, verbose):
     """Correlate objective metrics (SCORES) with human judgements (HUMAN) across conditions.
 
     SCORES: summary.csv of `evalsuite score`, or a condition,metric,value or condition,value
     CSV. HUMAN: ratings.csv, likert_means.csv, elo.csv or pairwise.csv of `evalsuite analyze`,
     or a condition,value CSV (published numbers). For every metric and human measure: n,
-    Spearman's rho and Kendall's tau-b with their p-values (scipy), percentile bootstrap CIs
+    Spearman's rho and Kendall's tau-b with their p-values (exact, over every ordering of the
+    conditions, up to 8 conditions; t / normal approximation above), percentile bootstrap CIs
     over conditions (and over participants with --results), and whether the sign agrees with
     the metric's direction. Writes correlations.csv/.md/.tex and figures/scatter_<metric>.png.
 
@@ -107,7 +111,7 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
     from evalsuite.analysis.correlate import correlate as run
     from evalsuite.analysis.correlate_boot import ParticipantResampler
     from evalsuite.analysis.correlate_io import read_human, read_scores
-    from evalsuite.analysis.correlate_out import display_table, write_outputs
+    from evalsuite.analysis.correlate_out import display_table, group_notes, write_notes, write_outputs
 
     metric_names = _names(metrics)
     s = read_scores(scores)
@@ -147,19 +151,26 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
         resampler = ParticipantResampler.from_results(results, mismatch_suffix=mismatch_suffix, **opts)
         check_against_results(h, resampler, results)
     notes: list[str] = []
+    row_notes: list[tuple[str, str, str, str]] = []
     table = run(s, h, n_boot=n_boot, seed=seed, alpha=alpha, participants=resampler, shared_only=shared_only,
-                human_higher=not human_lower_better, notes=notes)
+                human_higher=not human_lower_better, notes=notes, row_notes=row_notes)
     for n in notes:
         click.echo(f"warning: {n}")
     write_outputs(table, s, h, out_dir, alpha=alpha, figures=not no_figures)
     shown = display_table(table, alpha)
-    cols = [c for c in shown.columns if c not in ("p (rho)", "p (tau_b)", "note")]
+    cols = [c for c in shown.columns if c not in ("p (rho)", "p (tau_b)", "p from", "note")]
     widths = {c: max(len(c), *(len(str(v)) for v in shown[c])) for c in cols}
     click.echo("  ".join(c.ljust(widths[c]) for c in cols))
     for _, r in shown.iterrows():
         click.echo("  ".join(str(r[c]).ljust(widths[c]) for c in cols).rstrip())
-    undefined = table[table["note"] != ""]
-    for r in undefined.itertuples(index=False):
-        click.echo(f"note: {r.metric} / {r.human_measure}: {r.note}")
+    notes_file = write_notes(row_notes, out_dir / "notes.csv")
+    if verbose:
+        for _, metric, measure, text in row_notes:
+            click.echo(f"note: {metric} / {measure}: {text}")
+    else:
+        for line in group_notes(row_notes):
+            click.echo(f"note: {line}")
+    if notes_file is not None:
+        click.echo(f"All {len(row_notes)} notes: {notes_file}")
     click.echo(f"Wrote {out_dir / 'correlations.csv'} (.md, .tex)" + ("" if no_figures else " and figures/"))
 

@@ -10,12 +10,12 @@ import numpy as np
 import pandas as pd
 
 from evalsuite.analysis import report
-from evalsuite.analysis.correlate import COLUMNS, correlate
+from evalsuite.analysis.correlate import COLUMNS, EXACT_MAX_N, correlate
 from evalsuite.analysis.correlate_boot import ParticipantResampler
 from evalsuite.analysis.correlate_io import read_human, read_scores
 from evalsuite.errors import InputError
 
-__all__ = ["write_outputs", "display_table", "fig_scatter", "report_section"]
+__all__ = ["write_outputs", "display_table", "fig_scatter", "report_section", "group_notes", "write_notes"]
 
 _ARROW = {"lower": "↓", "higher": "↑", "closer to natural": "≈nat"}
 _TEX_WORD = {"lower": "(lower better)", "higher": "(higher better)", "closer to natural": "(closer to natural)"}
@@ -29,6 +29,39 @@ def _p(v) -> str:
     if v is None or not math.isfinite(float(v)):
         return report.DASH
     return "<0.0001" if v < 1e-4 else f"{v:.4f}"
+
+
+def _p_from(rho_method, tau_method) -> str:
+    """How the p-values were computed: one word when both agree, else each named."""
+    rho_method, tau_method = (m if isinstance(m, str) else "" for m in (rho_method, tau_method))
+    if not rho_method and not tau_method:
+        return report.DASH
+    return rho_method if rho_method == tau_method else f"rho {rho_method or report.DASH}; tau_b {tau_method or report.DASH}"
+
+
+def group_notes(row_notes, examples: int = 3) -> list[str]:
+    """One line per kind of note (``row_notes``: ``(kind, metric, human_measure, text)`` as collected by
+    :func:`~evalsuite.analysis.correlate.correlate`): how many rows have it and the first ``examples``."""
+    groups: dict[str, list[tuple[str, str, str]]] = {}
+    for kind, metric, measure, text in row_notes:
+        groups.setdefault(kind, []).append((metric, measure, text))
+    lines = []
+    for kind, items in groups.items():
+        shown = "; ".join(f"{m} / {h}: {t}" for m, h, t in items[:examples])
+        more = f"; and {len(items) - examples} more" if len(items) > examples else ""
+        lines.append(f"{kind} ({len(items)} row{'s' if len(items) != 1 else ''}): {shown}{more}")
+    return lines
+
+
+def write_notes(row_notes, path) -> pathlib.Path | None:
+    """Every row's notes as ``notes.csv`` (``kind, metric, human_measure, note``); no file (and an older one
+    removed) when there are none."""
+    path = pathlib.Path(path)
+    if not row_notes:
+        path.unlink(missing_ok=True)
+        return None
+    pd.DataFrame(list(row_notes), columns=["kind", "metric", "human_measure", "note"]).to_csv(path, index=False)
+    return path
 
 
 def _ci(lo, hi) -> str:
@@ -53,6 +86,7 @@ def display_table(table: pd.DataFrame, alpha: float = 0.05, arrows: dict | None 
         if part:
             d["tau_b CI (participants)"] = _ci(r["kendall_ci_low_participants"], r["kendall_ci_high_participants"])
         d["agrees"] = {True: "yes", False: "no"}.get(r["agrees"], report.DASH)
+        d["p from"] = _p_from(r["spearman_p_method"], r["kendall_p_method"])
         d["note"] = r["note"]
         rows.append(d)
     return pd.DataFrame(rows)
@@ -163,7 +197,8 @@ def report_section(scores_path, out_dir, data: pd.DataFrame, *, n_boot: int = 10
         tables.append(t)
         humans.append(human)
     intro = (f"<p>Each metric of <code>{html.escape(pathlib.Path(scores_path).name)}</code> against each human "
-             "measure across the conditions both have: Spearman's rho and Kendall's tau-b (scipy), "
+             "measure across the conditions both have: Spearman's rho and Kendall's tau-b (scipy; p-values "
+             f"exact, over every ordering of the conditions, up to n = {EXACT_MAX_N}; <em>p from</em> says which), "
              f"{100 * (1 - alpha):g}% percentile bootstrap CIs over conditions and over participants "
              f"({n_boot} resamples, seed {seed}). <em>agrees</em>: the sign a valid metric gives "
              "(lower-is-better metrics should correlate negatively with ratings).</p>")
