@@ -27,6 +27,12 @@ def test_info_prints_layout_splits_speakers_rates_and_what_is_missing(tmp_path):
     assert "missing motion: 1 segments (tst_2023_v0_000)" in lines
     assert "interlocutor: 4 segments" in lines
     assert any(line.startswith('corpus.json: {"model": "synthetic speaker v1"') for line in lines)
+    assert "metadata:   trn/metadata.csv, tst/metadata.csv, val/metadata.csv" in lines
+    for split in ("trn", "val", "tst"):
+        (root / split / "metadata.csv").unlink()
+    lines = _run("info", root).output.splitlines()
+    assert "speakers:   0" in lines and "metadata:   none found (speaker ids come from metadata.csv in each split " \
+        "folder or at the root)" in lines
 
 
 def test_info_json_and_mismatch_report(tmp_path):

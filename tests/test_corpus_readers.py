@@ -59,6 +59,57 @@ def test_genea2022_is_the_monadic_layout_with_its_metadata(tmp_path):
     assert (c.get("trn_2022_v0_001").speaker, c.get("trn_2022_v0_001").meta["finger_incl"]) == ("02", False)
 
 
+def _move_metadata_to_the_root(root):
+    """One metadata.csv for all splits at the corpus root, the per-split ones removed."""
+    lines = []
+    for split in ("trn", "val", "tst"):
+        header, *rows = (root / split / "metadata.csv").read_text().splitlines()
+        (root / split / "metadata.csv").unlink()
+        lines += rows
+    (root / "metadata.csv").write_text("\n".join([header, *lines]) + "\n")
+
+
+def test_genea2023_metadata_at_the_root_gives_the_speakers(tmp_path):
+    root = genea2023(tmp_path / "g23")
+    split_wise = load_corpus(root)
+    assert split_wise.meta["metadata_files"] == ["trn/metadata.csv", "tst/metadata.csv", "val/metadata.csv"]
+    _move_metadata_to_the_root(root)
+    c = load_corpus(root)
+    assert c.meta["metadata_files"] == ["metadata.csv"] and c.speakers == split_wise.speakers == ("01", "02", "03")
+    assert {s.id: (s.speaker, s.meta["finger_incl"], s.meta["interlocutor_speaker"]) for s in c} == \
+        {s.id: (s.speaker, s.meta["finger_incl"], s.meta["interlocutor_speaker"]) for s in split_wise}
+
+
+def test_genea_metadata_that_cannot_be_understood_is_an_error_naming_the_file(tmp_path):
+    root = genea2023(tmp_path / "g23")
+    meta = root / "trn" / "metadata.csv"
+    good = meta.read_text()
+    meta.write_text("take,role,fingers_ok,speaker\ntrn_2023_v0_000,main-agent,1,01\n")
+    with pytest.raises(InputError, match=r"metadata\.csv:1: cannot read the columns take, role, fingers_ok, speaker: "
+                                         r"expected GENEA 2023's header prefix, main-agent_id"):
+        load_corpus(root)
+    meta.write_text("prefix,main-agent_has_fingers\ntrn_2023_v0_000,fingers_incl\n")
+    with pytest.raises(InputError, match="no speaker column"):
+        load_corpus(root)
+    meta.write_text(good.replace("finger_excl", "no_fingers", 1))
+    with pytest.raises(InputError, match=r"metadata\.csv:2.*'no_fingers' is not a finger flag"):
+        load_corpus(root)
+    meta.write_text(good.replace("_v0_", "_v1_"))  # the recordings of another release
+    (root / "val" / "metadata.csv").unlink()
+    (root / "tst" / "metadata.csv").unlink()
+    with pytest.raises(InputError, match=r"no recording of trn/metadata\.csv \(e\.g\. trn_2023_v1_000\) is in the "
+                                         r"corpus \(e\.g\. trn_2023_v0_000\)"):
+        load_corpus(root)
+    meta.write_text(good)
+    (root / "metadata.csv").write_text(good.replace(",01,", ",07,", 1))
+    with pytest.raises(InputError, match="trn_2023_v0_000 is also in another metadata file with other values"):
+        load_corpus(root)
+    f = folder(tmp_path / "plain")
+    (f / "metadata.csv").write_text("segment,speaker\na,1\n")
+    with pytest.raises(InputError, match="metadata.csv is read in the GENEA layouts only.*splits.csv"):
+        load_corpus(f)
+
+
 def test_genea2023_empty_tsv_is_an_empty_transcript_as_in_the_real_data(tmp_path):
     root = genea2023(tmp_path / "g23")
     (root / "trn" / "main-agent" / "tsv" / "trn_2023_v0_001_main-agent.tsv").write_text("")

@@ -123,7 +123,7 @@ def summarize(c: Corpus) -> dict[str, Any]:
         "interlocutor_streams": sum(s.interlocutor is not None for s in c),
         "labels": sum(s.labels is not None for s in c),
         "missing": missing, "mismatches": c.meta.get("mismatches", []), "skipped": c.meta.get("skipped", []),
-        "corpus_json": c.meta.get("corpus_json"),
+        "corpus_json": c.meta.get("corpus_json"), "metadata_files": c.meta.get("metadata_files"),
     }
 
 
@@ -141,6 +141,9 @@ def _print_info(info: dict[str, Any]) -> None:
              f"{len(sp['speakers'])} speakers")
     spk = info["speakers"]
     echo(f"speakers:   {len(spk)}" + (f" ({', '.join(spk[:20])}{', ...' if len(spk) > 20 else ''})" if spk else ""))
+    if info.get("metadata_files") is not None:  # the GENEA layouts: where the speaker ids come from
+        echo("metadata:   " + (", ".join(info["metadata_files"]) or "none found (speaker ids come from metadata.csv "
+                                                                     "in each split folder or at the root)"))
     echo(f"audio:      {_counts(info['audio_rates'], ' Hz')}; channels {_counts(info['audio_channels'], '')}")
     echo(f"motion:     {_counts(info['motion_fps'], ' fps')}")
     echo(f"transcripts: {info['transcripts']} ({info['estimated_transcripts']} with estimated timings)")

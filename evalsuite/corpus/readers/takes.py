@@ -123,6 +123,9 @@ def _detect_folder(root: pathlib.Path) -> bool:
                  description="a plain folder: files matched by stem (.wav; .bvh/.npz/.npy/.csv motion; "
                              ".json/.tsv/.TextGrid/.txt transcripts); optional splits.csv (segment, split[, speaker])")
 def read_folder(root: pathlib.Path, b: CorpusBuilder) -> None:
+    if (root / "metadata.csv").is_file():
+        raise InputError("metadata.csv is read in the GENEA layouts only (trn|val|tst/ folders); in a plain folder "
+                         "give each segment's speaker in splits.csv (segment, split, speaker)", path=root / "metadata.csv")
     files = [p for p in _files(root, False) if p.name.lower() not in ("splits.csv", "corpus.json")]
     groups = _group(files, None)
     splits: dict[str, dict[str, str]] = {}
