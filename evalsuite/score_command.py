@@ -10,6 +10,7 @@ import pathlib
 
 import click
 
+from evalsuite.corpus.cli import on_mismatch_option
 from evalsuite.errors import InputError
 
 
@@ -68,6 +69,7 @@ def _fgd_family(model_path, raw: bool):
 @click.option("--fgd-raw", is_flag=True, help="With --fgd, also the raw-space FD of whole windows (slow: one "
               "eigendecomposition of window x pose dimensions per condition).")
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
+@on_mismatch_option
 def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, corpus_dir, sigma, fps, resample, speed_bins,
           acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, quiet):
     """Score generated motion (CONDITIONS) against natural motion (--reference).

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from click.testing import CliRunner
 from corpus_helpers import bvh, genea2020, synth, wav
 
@@ -98,3 +99,45 @@ def test_a_subcommand_is_one_entry_in_the_lazy_table(monkeypatch):
     r = _run("--help")
     assert "hello" in r.output and "absent" not in r.output
     assert _run("hello").output == "hello from the table\n"
+
+
+def _mismatched_corpus(tmp_path):
+    root = genea2020(tmp_path / "g20")
+    bvh(root / "Motion" / "Recording_002.bvh", 9.0, fps=60)  # the audio lasts 4 s
+    return root
+
+
+def test_every_command_that_loads_a_corpus_has_the_on_mismatch_its_error_names(tmp_path):
+    from evalsuite.corpus import load_corpus
+    from evalsuite.errors import InputError
+
+    root = _mismatched_corpus(tmp_path)
+    hint = "rerun with --on-mismatch warn (keep such segments, listed) or --on-mismatch skip (leave them out)"
+    commands = [("generate", "-g", "natural", "--corpus", root, "--split", "all"),
+                ("train", "-g", "aud2pose", "--corpus", root),
+                ("score", "-r", f"NA={root / 'Motion'}", f"B={root / 'Motion'}", "--corpus", root, "--quiet",
+                 "--no-figures"),
+                ("validate-metrics", "--corpus", root, "--no-fgd", "--quiet"),
+                ("corpus", "split", root), ("corpus", "info", root, "--on-mismatch", "error")]
+    for i, args in enumerate(commands):
+        r = CliRunner().invoke(main, [*map(str, args), "-o", str(tmp_path / f"out{i}")] if args[0] != "corpus"
+                               else [*map(str, args)])
+        assert r.exit_code == 1 and "Traceback" not in r.output, (args, r.output)
+        assert "segment 'Recording_002': audio Audio/Recording_002.wav lasts 4.000 s" in r.output and hint in r.output
+        help_text = CliRunner().invoke(main, [*map(str, args[:2 if args[0] == "corpus" else 1]), "--help"]).output
+        assert "--on-mismatch [error|warn|skip]" in help_text, args
+    with pytest.raises(InputError, match=r"load with on_mismatch='warn' or 'skip' \(`evalsuite corpus info DIR`"):
+        load_corpus(root)  # outside a command: the Python argument
+
+
+def test_on_mismatch_skip_lets_generate_and_score_use_the_rest(tmp_path):
+    root = _mismatched_corpus(tmp_path)
+    r = CliRunner().invoke(main, ["generate", "-g", "natural", "--corpus", str(root), "--split", "all",
+                                  "--on-mismatch", "skip", "-o", str(tmp_path / "nat")])
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "nat").glob("*.bvh")) == ["Recording_001.bvh"]
+    r = CliRunner().invoke(main, ["score", "-r", f"NA={tmp_path / 'nat'}", f"B={tmp_path / 'nat'}", "--corpus",
+                                  str(root), "--on-mismatch", "skip", "-m", "coupling", "--quiet", "--no-figures",
+                                  "-o", str(tmp_path / "scores")])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "scores" / "summary.csv").is_file()

@@ -6,6 +6,7 @@ so adding one (e.g. ``synth``) is one line here plus its own module.
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib
 import importlib.util
 import json
@@ -17,7 +18,7 @@ from typing import Any
 
 import click
 
-from evalsuite.corpus.readers import LAYOUTS, MISMATCH_POLICIES, load_corpus
+from evalsuite.corpus.readers import LAYOUTS, MISMATCH_POLICIES, load_corpus, mismatch_policy
 from evalsuite.corpus.splits import split_corpus, write_splits
 from evalsuite.corpus.types import SPLITS, Corpus
 from evalsuite.errors import InputError
@@ -81,6 +82,20 @@ def _load_options(f: Any) -> Any:
     f = click.option("--layout", type=click.Choice(sorted(LAYOUTS)), default=None,
                      help="The corpus layout (default: detected).")(f)
     return f
+
+
+def on_mismatch_option(f: Any) -> Any:
+    """``--on-mismatch`` for a command that loads a corpus: the command runs inside
+    ``mismatch_policy(on_mismatch)``, so every corpus it reads applies the option and a mismatch error names it.
+    The command function itself takes no ``on_mismatch`` parameter."""
+    @functools.wraps(f)
+    def run(*args: Any, on_mismatch: str, **kwargs: Any) -> Any:
+        with mismatch_policy(on_mismatch):
+            return f(*args, **kwargs)
+
+    return click.option("--on-mismatch", type=click.Choice(MISMATCH_POLICIES), default="error", show_default=True,
+                        help="Corpus segments whose audio and motion durations disagree: stop at the first (error), "
+                             "keep them with a warning (warn), or leave them out (skip).")(run)
 
 
 def _seconds(t: float) -> str:
@@ -183,7 +198,7 @@ def info(directory: pathlib.Path, layout: str | None, tolerance: float, toleranc
       evalsuite corpus info beat_english_v0.2.1/ --layout beat --json
       evalsuite corpus info takes/ --on-mismatch error --tolerance 0.1
     """
-    with _user_errors(), warnings.catch_warnings():
+    with _user_errors(), warnings.catch_warnings(), mismatch_policy(on_mismatch):
         warnings.simplefilter("ignore")  # mismatches are listed in the report
         c = load_corpus(directory, layout, on_mismatch=on_mismatch, tolerance=tolerance, tolerance_rel=tolerance_rel,
                         motion_fps=motion_fps)
@@ -219,7 +234,7 @@ def split(directory: pathlib.Path, val: float, test: float, seed: int, by: str, 
       evalsuite corpus split takes/ --val 0.1 --test 0.1 --seed 0
       evalsuite corpus split BEAT/ --layout beat --seed 3 -o beat_splits.csv
     """
-    with _user_errors():
+    with _user_errors(), mismatch_policy(on_mismatch):
         c = load_corpus(directory, layout, on_mismatch=on_mismatch, tolerance=tolerance, tolerance_rel=tolerance_rel,
                         motion_fps=motion_fps)
         c = split_corpus(c, val=val, test=test, seed=seed, by=by)

@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from evalsuite.corpus.cli import on_mismatch_option
 from evalsuite.errors import InputError
 from evalsuite.generators.registry import find_generator, list_generators
 
@@ -155,6 +156,7 @@ def check_command(name: str, config_file: str | None, settings: tuple[str, ...],
 @click.option("-j", "--jobs", type=int, default=1, show_default=True, help="Local worker processes.")
 @click.option("--dask", "dask_address", help="dask.distributed scheduler address.")
 @click.option("--no-determinism-check", is_flag=True, help="Skip generating the first segment twice.")
+@on_mismatch_option
 @click.option("-o", "--out", required=True, type=click.Path(file_okay=False), help="Output folder.")
 def generate_command(name: str, corpus: str | None, split: str, segments: tuple[str, ...], audio: str | None,
                      transcript: str | None, model: str | None, config_file: str | None, settings: tuple[str, ...],
@@ -203,6 +205,7 @@ def generate_command(name: str, corpus: str | None, split: str, segments: tuple[
 @click.option("--config", "config_file", type=click.Path(dir_okay=False), help="Options (YAML/JSON).")
 @click.option("--set", "settings", multiple=True, metavar="KEY=VALUE", help="One option (repeatable).")
 @click.option("--budget-minutes", type=float, help="Stop training after this many minutes.")
+@on_mismatch_option
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("-o", "--out", required=True, type=click.Path(file_okay=False), help="Model folder to write.")
 def train_command(name: str, corpus: str, config_file: str | None, settings: tuple[str, ...],

@@ -10,6 +10,7 @@ from typing import Any
 
 import click
 
+from evalsuite.corpus.cli import on_mismatch_option
 from evalsuite.errors import InputError
 
 __all__ = ["validate_metrics", "run_validation", "ValidityRun", "FGD_EPOCHS"]
@@ -144,6 +145,7 @@ def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, 
 @click.option("--fgd-epochs", type=click.IntRange(min=1), default=FGD_EPOCHS, show_default=True,
               help="Epochs of the small FGD encoder.")
 @click.option("--quiet", is_flag=True, help="No progress bars and no table.")
+@on_mismatch_option
 def validate_metrics(corpus_dir: pathlib.Path, out_dir: pathlib.Path, split: str, models: tuple[str, ...],
                      bootstrap: int, seed: int, fps: float, jobs: int, no_fgd: bool, fgd_model: pathlib.Path | None,
                      fgd_epochs: int, quiet: bool) -> None:

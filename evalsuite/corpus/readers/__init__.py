@@ -12,13 +12,21 @@ import os
 import pathlib
 
 from evalsuite.corpus.readers import genea, takes  # noqa: F401  (registers the built-in layouts)
-from evalsuite.corpus.readers.base import LAYOUTS, MISMATCH_POLICIES, CorpusBuilder, ReadOptions, register_layout
+from evalsuite.corpus.readers.base import (
+    LAYOUTS,
+    MISMATCH_POLICIES,
+    CorpusBuilder,
+    ReadOptions,
+    current_mismatch_policy,
+    mismatch_policy,
+    register_layout,
+)
 from evalsuite.corpus.readers.headers import motion_info, wav_info
 from evalsuite.corpus.types import Corpus
 from evalsuite.errors import InputError
 
 __all__ = ["load_corpus", "detect_layout", "register_layout", "LAYOUTS", "ReadOptions", "CorpusBuilder",
-           "MISMATCH_POLICIES", "wav_info", "motion_info"]
+           "MISMATCH_POLICIES", "mismatch_policy", "wav_info", "motion_info"]
 
 
 def _known() -> str:
@@ -43,7 +51,7 @@ def detect_layout(path: str | os.PathLike[str]) -> str:
                      path=root)
 
 
-def load_corpus(path: str | os.PathLike[str], layout: str | None = None, *, on_mismatch: str = "error",
+def load_corpus(path: str | os.PathLike[str], layout: str | None = None, *, on_mismatch: str | None = None,
                 tolerance: float = 0.5, tolerance_rel: float = 0.02, motion_fps: float | None = None) -> Corpus:
     """Read a corpus folder into a :class:`~evalsuite.corpus.types.Corpus` (files by path; headers only).
 
@@ -53,7 +61,9 @@ def load_corpus(path: str | os.PathLike[str], layout: str | None = None, *, on_m
             ``max(tolerance, tolerance_rel * the longer)`` seconds: ``'error'`` (InputError naming both files
             and durations), ``'warn'`` (kept, warned, recorded) or ``'skip'`` (left out, recorded). Records are
             in ``corpus.meta['mismatches']`` and ``['skipped']``; missing parts in ``['missing']`` (counts)
-            and each ``segment.meta['missing']``.
+            and each ``segment.meta['missing']``. None: the policy of the enclosing
+            :func:`~evalsuite.corpus.readers.base.mismatch_policy` (a command's ``--on-mismatch``), else
+            ``'error'``.
         motion_fps: frame rate of motion files that store none (``.npy``, ``.csv``).
     """
     root = pathlib.Path(path)
@@ -61,7 +71,9 @@ def load_corpus(path: str | os.PathLike[str], layout: str | None = None, *, on_m
     reader = LAYOUTS.get(name)
     if not root.is_dir():
         raise InputError("no such corpus folder", path=root)
-    builder = CorpusBuilder(root, name, ReadOptions(on_mismatch, tolerance, tolerance_rel, motion_fps))
+    policy, option = current_mismatch_policy()
+    builder = CorpusBuilder(root, name, ReadOptions(on_mismatch or policy, tolerance, tolerance_rel, motion_fps,
+                                                    option))
     reader.read(root, builder)
     if not builder.segments and not builder.meta["skipped"]:
         raise InputError(f"no segments found for layout {name!r} ({reader.description})", path=root)

@@ -7,10 +7,12 @@ that audio and motion durations agree, records what is missing, and applies the 
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,9 +22,31 @@ from evalsuite.corpus.types import Corpus, Segment, Stream, Transcript, canonica
 from evalsuite.errors import InputError
 from evalsuite.registry import Registry
 
-__all__ = ["Layout", "LAYOUTS", "ReadOptions", "CorpusBuilder", "register_layout", "MISMATCH_POLICIES"]
+__all__ = ["Layout", "LAYOUTS", "ReadOptions", "CorpusBuilder", "register_layout", "MISMATCH_POLICIES",
+           "mismatch_policy", "current_mismatch_policy"]
 
 MISMATCH_POLICIES = ("error", "warn", "skip")
+_POLICY: ContextVar[tuple[str, str] | None] = ContextVar("evalsuite_corpus_on_mismatch", default=None)
+
+
+@contextlib.contextmanager
+def mismatch_policy(on_mismatch: str, option: str = "--on-mismatch") -> Iterator[None]:
+    """Within the block, ``load_corpus`` calls that name no ``on_mismatch`` (however deep: a generator, a
+    metric family) apply ``on_mismatch``, and the duration-mismatch error names ``option``, the command-line
+    option of the running command that sets it."""
+    if on_mismatch not in MISMATCH_POLICIES:
+        raise InputError(f"on_mismatch must be one of {', '.join(MISMATCH_POLICIES)}, got {on_mismatch!r}",
+                         field=option)
+    token = _POLICY.set((on_mismatch, option))
+    try:
+        yield
+    finally:
+        _POLICY.reset(token)
+
+
+def current_mismatch_policy() -> tuple[str, str | None]:
+    """``(on_mismatch, option)`` set by the innermost :func:`mismatch_policy`, else ``("error", None)``."""
+    return _POLICY.get() or ("error", None)
 
 
 @dataclass(frozen=True)
@@ -30,12 +54,14 @@ class ReadOptions:
     """``on_mismatch``: what to do with a segment whose audio and motion durations differ by more than
     ``max(tolerance, tolerance_rel * longer duration)``: ``'error'`` (default), ``'warn'`` (keep it, with a
     warning and a record) or ``'skip'`` (leave it out, with a record). ``motion_fps`` is the rate of motion
-    files that store none (``.npy``, ``.csv``)."""
+    files that store none (``.npy``, ``.csv``). ``option``: the command-line option that sets ``on_mismatch``
+    in the command being run (named by the mismatch error), None outside a command."""
 
     on_mismatch: str = "error"
     tolerance: float = 0.5
     tolerance_rel: float = 0.02
     motion_fps: float | None = None
+    option: str | None = None
 
     def __post_init__(self) -> None:
         if self.on_mismatch not in MISMATCH_POLICIES:
@@ -169,8 +195,10 @@ class CorpusBuilder:
                    f"{_rel(motion, self.root)} lasts {m:.3f} s; expected them to agree within {limit:.3f} s "
                    f"(max({opt.tolerance:g} s, {100 * opt.tolerance_rel:g} %))")
         if opt.on_mismatch == "error":
-            raise InputError(message + "; fix the files or load with on_mismatch='warn' or 'skip' "
-                             "(CLI: --on-mismatch)", path=audio)
+            hint = (f"rerun with {opt.option} warn (keep such segments, listed) or {opt.option} skip (leave them "
+                    "out)" if opt.option else "load with on_mismatch='warn' or 'skip' (`evalsuite corpus info "
+                    "DIR` lists every mismatch)")
+            raise InputError(f"{message}; fix the files or {hint}", path=audio)
         self.meta["mismatches"].append(record)
         if opt.on_mismatch == "warn":
             warnings.warn(message, stacklevel=3)
