@@ -82,18 +82,18 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
 
     Example: evalsuite score -r natural=data/NA data/SysA data/SysB --joints genea2020_upper -o scores
     """
-    from evalsuite.metrics.engine import score_folders
+    from evalsuite.metrics.engine import ScoreOptions, score_folders
     from evalsuite.metrics.figures import write_figures
     from evalsuite.metrics.report import format_table, summary_frame, write_outputs
 
     group_list = [g.replace(";", ",") for g in groups.split(",") if g.strip()] if groups else []
     extra = [_fgd_family(fgd_model, fgd_raw)] if fgd_model is not None else []
-    result = score_folders(reference, conditions, joints=joints, metrics=list(metrics) or None,
-                           convention=convention, audio_dir=audio_dir, fps=fps, resample=resample,
-                           speed_bins=speed_bins, acceleration_bins=acceleration_bins, groups=group_list,
-                           sigma=sigma, bootstrap=bootstrap, seed=seed, jobs=jobs, dask_address=dask_address,
-                           strict=strict, progress=not quiet, figures=not no_figures, extra_families=extra,
-                           corpus=corpus_dir)
+    options = ScoreOptions(joints=joints, metrics=list(metrics) or None, convention=convention, audio_dir=audio_dir,
+                           corpus=corpus_dir, fps=fps, resample=resample, speed_bins=speed_bins,
+                           acceleration_bins=acceleration_bins, groups=group_list, sigma=sigma, bootstrap=bootstrap,
+                           seed=seed, jobs=jobs, dask_address=dask_address, strict=strict, progress=not quiet,
+                           figures=not no_figures, extra_families=extra)
+    result = score_folders(reference, conditions, options)
     paths = write_outputs(result, out_dir)
     figures = [] if no_figures else write_figures(result, out_dir / "figures")
     for issue in result.issues:

@@ -1,9 +1,12 @@
 """The scoring engine behind ``evalsuite score``: plan -> run -> reduce over the registered metric families.
 
-1. **Plan** (:mod:`evalsuite.metrics.planning`): pair the files of the natural folder and of each condition
-   folder by name, resolve joints, groups and metrics.
-2. **Run**: one task per sequence name (the natural file and every condition's file of that name), so the
-   natural motion is loaded once per name. :func:`score_sequence` runs in the parent, in local processes or
+The choices of a run are one :class:`~evalsuite.metrics.options.ScoreOptions`.
+
+1. **Plan** (:mod:`evalsuite.metrics.planning`, :func:`plan_for`): pair the files of the natural folder and
+   of each condition folder by name and resolve the joints; :func:`setup_for` resolves groups, metrics and
+   histogram bins into the workers' :class:`ScoreSetup`.
+2. **Run**: one :class:`ScoreTask` per sequence name (the natural file and every condition's file of that
+   name), so the natural motion is loaded once per name. :func:`score_sequence` runs in the parent, in local processes or
    on a dask cluster (:func:`evalsuite.parallel.run`); it loads each file and lets every family measure it
    (:meth:`MetricFamily.measure`), returning plain numpy summaries, never the raw motion. A file that fails
    is reported in its record and the others go on.
@@ -11,6 +14,9 @@
    summaries into running sums as they come (:meth:`MetricFamily.fold`) and then turn each condition's
    records into rows (:meth:`MetricFamily.reduce`) in a fixed order (conditions as given, sequences sorted),
    so the numbers are identical however the per-file work was run.
+
+:func:`score_plan` runs 1-3 on a plan; :func:`score_folders` (``evalsuite score``) and the validity benchmark
+(:mod:`evalsuite.validity.scoring`) both call it.
 """
 from __future__ import annotations
 
@@ -27,7 +33,6 @@ from evalsuite.hashing import file_sha256
 from evalsuite.metrics.beats import audio_onsets
 from evalsuite.metrics.conventions import Convention, get_convention, reference_edges
 from evalsuite.metrics.families import (
-    MetricFamily,
     ReduceContext,
     SequenceContext,
     bootstrap_weights,
@@ -35,39 +40,14 @@ from evalsuite.metrics.families import (
     registered_families,
 )
 from evalsuite.metrics.histograms import automatic_edges
-from evalsuite.metrics.planning import DEFAULT_GROUPS, Plan, plan_scoring, resolve_groups, resolve_metrics
+from evalsuite.metrics.options import ScoreOptions, ScoreSetup, ScoreTask
+from evalsuite.metrics.planning import Plan, plan_scoring, resolve_groups, resolve_metrics
 from evalsuite.metrics.tracks import wrist_track
 from evalsuite.motion.io import load_motion
 from evalsuite.parallel import run
 
-__all__ = ["ScoreSetup", "ScoreResult", "score_sequence", "probe_ranges", "score_folders", "reduce_results"]
-
-
-@dataclass
-class ScoreSetup:
-    """Everything a worker needs besides the file paths (picklable, sent with every task)."""
-
-    joints: list[str]
-    metrics: list[str]
-    family_objects: tuple[MetricFamily, ...] = ()
-    convention: str = "default"
-    fps: float | None = None          # for positions files without a frame rate
-    resample: float | None = None     # resample every file to this rate first
-    edges: dict[str, np.ndarray] = field(default_factory=dict)   # quantity -> bin edges
-    groups: dict[str, list[str]] = field(default_factory=dict)   # group name -> joint names
-    sigma: float = 0.1
-    length_tolerance_s: float = 1.0
-    figures: bool = True
-
-    @property
-    def families(self) -> list[str]:
-        """Names of the families that have a metric in ``metrics``, in registration order."""
-        wanted = set(self.metrics)
-        return [f.name for f in self.family_objects if any(m.name in wanted for m in f.metrics)]
-
-    def active(self) -> list[MetricFamily]:
-        names = set(self.families)
-        return [f for f in self.family_objects if f.name in names]
+__all__ = ["ScoreOptions", "ScoreSetup", "ScoreTask", "ScoreResult", "score_sequence", "probe_ranges", "plan_for",
+           "setup_for", "tasks_for", "score_plan", "score_folders", "reduce_results"]
 
 
 @dataclass
@@ -89,6 +69,7 @@ class ScoreResult:
     bootstrap: int = 0
     seed: int = 0
     resampled: list[str] = field(default_factory=list)
+    task_results: list[dict[str, Any]] = field(default_factory=list)   # score_plan(..., keep_task_results=True)
 
 
 def _load(path: pathlib.Path, setup: ScoreSetup) -> tuple[Any, list[dict[str, Any]]]:
@@ -127,15 +108,13 @@ def _measure(motion: Any, pos: np.ndarray, setup: ScoreSetup, conv: Convention, 
     return ctx.record
 
 
-def score_sequence(task: tuple[Any, ...]) -> dict[str, Any]:
-    """Measure one sequence in every condition: ``task = (name, [(condition, path), ...], audio, setup[,
-    segment])`` (the corpus segment, with ``--corpus``).
+def score_sequence(task: ScoreTask) -> dict[str, Any]:
+    """Measure one sequence in every condition (``task.entries``, the natural file first).
 
-    The first entry is the natural file. Returns ``{"name", "records": {condition: record}}`` where a
-    record holds numpy summaries, or ``{"error": message}`` for a file that could not be scored.
+    Returns ``{"name", "records": {condition: record}}`` where a record holds numpy summaries, or
+    ``{"error": message}`` for a file that could not be scored.
     """
-    name, entries, audio_path, setup = task[:4]
-    segment = task[4] if len(task) > 4 else None
+    setup, audio_path, segment = task.setup, task.audio, task.segment
     conv = get_convention(setup.convention)
     records: dict[str, dict[str, Any]] = {}
     onsets = None
@@ -152,7 +131,7 @@ def score_sequence(task: tuple[Any, ...]) -> dict[str, Any]:
             audio_error = str(exc)
     natural_pos = None
     natural_cache: dict[Any, Any] = {}
-    for k, (cond, path) in enumerate(entries):
+    for k, (cond, path) in enumerate(task.entries):
         try:
             motion, resampled = _load(path, setup)
             pos = _selected_positions(motion, setup.joints)
@@ -170,7 +149,7 @@ def score_sequence(task: tuple[Any, ...]) -> dict[str, Any]:
             records[cond] = {"error": str(exc), "path": str(path)}
         except Exception as exc:  # a broken file must not lose the other results
             records[cond] = {"error": f"{path}: cannot be scored ({type(exc).__name__}: {exc})", "path": str(path)}
-    return {"name": name, "records": records}
+    return {"name": task.name, "records": records}
 
 
 def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict[str, Any]:
@@ -192,13 +171,18 @@ def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict[str, Any]:
 
 
 class _Folder:
-    """Folds each result's bulky summaries into per-condition sums, in task order (see module docstring)."""
+    """Folds each result's bulky summaries into per-condition sums, in task order (see module docstring).
+    With ``kept``, the results as they came are appended to it and a copy of each is folded instead (a
+    family's ``fold`` may pop what it has used from a record)."""
 
-    def __init__(self, setup: ScoreSetup, reference: str, keep: bool):
-        self.families, self.reference, self.keep = setup.active(), reference, keep
+    def __init__(self, setup: ScoreSetup, reference: str, keep: bool, kept: list[dict[str, Any]] | None = None):
+        self.families, self.reference, self.keep, self.kept = setup.active(), reference, keep, kept
         self.acc: dict[str, dict[str, Any]] = {}
 
     def __call__(self, index: int, result: dict[str, Any]) -> dict[str, Any]:
+        if self.kept is not None:
+            self.kept.append(result)
+            result = {"name": result["name"], "records": {c: dict(r) for c, r in result["records"].items()}}
         records = result["records"]
         nat = records.get(self.reference, {})
         for cond, rec in records.items():
@@ -214,13 +198,15 @@ class _Folder:
         return result
 
 
-def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]], *, bootstrap: int = 0, seed: int = 0,
-                   strict: bool = False, acc: dict[str, Any] | None = None, jobs: int = 1,
-                   progress: bool = False) -> ScoreResult:
+def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]], options: ScoreOptions | None = None,
+                   *, acc: dict[str, Any] | None = None) -> ScoreResult:
     """Summary, per-sequence and per-joint rows, pooled histograms and issues from task results.
 
-    With ``bootstrap``, the families' resampled statistics run on ``jobs`` threads; ``progress`` shows a
-    bar of them (with an ETA)."""
+    With ``options.bootstrap``, the families' resampled statistics run on ``options.jobs`` threads;
+    ``options.progress`` shows a bar of them (with an ETA). ``acc``: the sums folded while the tasks ran
+    (default: fold ``results`` here). Without options: no bootstrap, no progress bar, not strict."""
+    opts = options if options is not None else ScoreOptions(progress=False)
+    bootstrap, seed, jobs, progress = opts.bootstrap, opts.seed, opts.jobs, opts.progress
     if acc is None:
         folder = _Folder(setup, plan.reference, keep=True)
         for i, res in enumerate(results):
@@ -236,7 +222,7 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]],
                 continue
             issues.extend(f"{cond}/{res['name']}: {w}" for w in rec.get("warnings", []))
             records[cond][res["name"]] = rec
-    if errors and strict:
+    if errors and opts.strict:
         raise InputError(f"{len(errors)} file(s) could not be scored (--strict): " + "; ".join(errors[:5]))
     issues.extend(f"skipped: {e}" for e in errors)
     fps_by_cond = {c: sorted({r["fps"] for r in recs.values()}) for c, recs in records.items() if recs}
@@ -280,66 +266,74 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]],
     return out
 
 
-def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path], *,
-                  joints: str | Sequence[str] | None = None,
-                  metrics: str | Sequence[str] | None = None, convention: str = "default",
-                  audio_dir: str | pathlib.Path | None = None, fps: float | None = None,
-                  resample: float | None = None, speed_bins: str | tuple[float, float] | None = None,
-                  acceleration_bins: str | tuple[float, float] | None = None,
-                  groups: Sequence[str] = DEFAULT_GROUPS, sigma: float = 0.1, bootstrap: int = 0, seed: int = 0,
-                  jobs: int = 1, dask_address: str | None = None, strict: bool = False, progress: bool = True,
-                  figures: bool = True, extra_families: Sequence[MetricFamily] = (),
-                  corpus: str | pathlib.Path | None = None) -> ScoreResult:
-    """Score condition folders against a natural folder with every registered family (plus
-    ``extra_families``, e.g. FGD with a trained model) -> :class:`ScoreResult`. With ``corpus``, files are
-    matched to its segments by name (stem = segment id), which brings their speech and transcripts."""
-    conv = get_convention(convention)
-    families = {**registered_families(), **{f.name: f for f in extra_families}}
-    metric_list = resolve_metrics(metrics, audio_dir is not None, families, corpus is not None)
-    for fam in extra_families:  # a family given for this run is wanted even when not named
+def plan_for(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path], options: ScoreOptions) -> Plan:
+    """The files to score (:func:`evalsuite.metrics.planning.plan_scoring`) with the options' joints, audio,
+    strictness, frame rate and corpus."""
+    return plan_scoring(reference, conditions, options.joints, options.audio_dir, options.strict, options.fps,
+                        options.corpus)
+
+
+def setup_for(plan: Plan, options: ScoreOptions) -> ScoreSetup:
+    """The workers' setup: metrics of every registered family plus ``options.extra_families`` (each metric of a
+    default extra family is wanted even when not named), groups, and histogram bins (probed when not given)."""
+    conv = get_convention(options.convention)
+    extra = options.extra_families
+    families = {**registered_families(), **{f.name: f for f in extra}}
+    metric_list = resolve_metrics(options.metrics, options.audio_dir is not None, families, options.corpus is not None)
+    for fam in extra:
         metric_list += [m.name for m in fam.metrics if m.name not in metric_list and fam.default]
-    plan = plan_scoring(reference, conditions, joints, audio_dir, strict, fps, corpus)
     setup = ScoreSetup(joints=plan.joints, metrics=metric_list, family_objects=tuple(families.values()),
-                       convention=conv.name, fps=fps, resample=resample,
-                       groups=resolve_groups(groups, plan.joints), sigma=sigma, figures=figures)
+                       convention=conv.name, fps=options.fps, resample=options.resample,
+                       groups=resolve_groups(options.groups, plan.joints), sigma=options.sigma, figures=options.figures)
     if "histograms" in setup.families:
-        setup.edges = _edges(plan, setup, conv, speed_bins, acceleration_bins, jobs, dask_address, progress)
-    tasks, weights = [], []
-    for s in plan.names:
-        entries = [(c, plan.files[c][s]) for c in plan.conditions if s in plan.files[c]]
-        tasks.append((s, entries, plan.audio.get(s), setup, plan.segments.get(s)))
-        weights.append(len(entries))
-    folder = _Folder(setup, plan.reference, keep=bool(bootstrap))
-    results = run(score_sequence, tasks, jobs=jobs, dask_address=dask_address, progress=progress,
-                  weights=weights, desc="scoring", consume=folder, describe=_describe_task)
-    return reduce_results(plan, setup, results, bootstrap=bootstrap, seed=seed, strict=strict, acc=folder.acc,
-                          jobs=jobs, progress=progress)
+        setup.edges = _edges(plan, setup, conv, options)
+    return setup
 
 
-def _describe_task(task: tuple[Any, ...]) -> str:
-    return f"sequence {task[0]!r}"
+def tasks_for(plan: Plan, setup: ScoreSetup) -> list[ScoreTask]:
+    """One task per sequence name of the plan (sorted), with that name's file in every condition that has it."""
+    return [ScoreTask(s, tuple((c, plan.files[c][s]) for c in plan.conditions if s in plan.files[c]),
+                      plan.audio.get(s), setup, plan.segments.get(s)) for s in plan.names]
 
 
-def _parse_bins(spec: str | tuple[float, float] | None) -> tuple[float, float] | None:
-    if spec is None or isinstance(spec, tuple):
-        return spec
-    try:
-        top, width = (float(v) for v in str(spec).split(":"))
-    except ValueError:
-        raise InputError(f"expected bins as MAX:WIDTH (e.g. 250:2.5), got {spec!r}", field="bins") from None
-    return top, width
+def score_plan(plan: Plan, options: ScoreOptions, *, keep_task_results: bool = False) -> ScoreResult:
+    """Score a plan: setup -> tasks -> run -> reduce (see the module docstring) -> :class:`ScoreResult`.
+
+    With ``keep_task_results``, ``result.task_results`` holds every task's result as :func:`score_sequence`
+    returned it (in task order), e.g. to reduce resamples of the sequences again."""
+    setup = setup_for(plan, options)
+    tasks = tasks_for(plan, setup)
+    kept: list[dict[str, Any]] | None = [] if keep_task_results else None
+    folder = _Folder(setup, plan.reference, keep=bool(options.bootstrap), kept=kept)
+    results = run(score_sequence, tasks, jobs=options.jobs, dask_address=options.dask_address,
+                  progress=options.progress, weights=[len(t.entries) for t in tasks], desc="scoring",
+                  consume=folder, describe=ScoreTask.describe)
+    out = reduce_results(plan, setup, results, options, acc=folder.acc)
+    out.task_results = kept if kept is not None else []
+    return out
 
 
-def _edges(plan: Plan, setup: ScoreSetup, conv: Convention, speed_bins: Any, acceleration_bins: Any, jobs: int,
-           dask_address: str | None, progress: bool) -> dict[str, np.ndarray]:
-    given = {"speed": _parse_bins(speed_bins) or conv.bins("speed"),
-             "acceleration": _parse_bins(acceleration_bins) or conv.bins("acceleration")}
+def score_folders(reference: str | pathlib.Path, conditions: Sequence[str | pathlib.Path],
+                  options: ScoreOptions | None = None, **overrides: Any) -> ScoreResult:
+    """Score condition folders against a natural folder with every registered family (plus
+    ``options.extra_families``, e.g. FGD with a trained model) -> :class:`ScoreResult`.
+
+    ``overrides`` are :class:`ScoreOptions` fields applied to ``options`` (or to the defaults), so
+    ``score_folders(ref, conds, joints="genea2020_upper", bootstrap=1000)`` works too; an unknown name is a
+    ``TypeError`` naming the closest option. With ``corpus``, files are matched to its segments by name
+    (stem = segment id), which brings their speech and transcripts."""
+    opts = (options if options is not None else ScoreOptions()).replace(**overrides)
+    return score_plan(plan_for(reference, conditions, opts), opts)
+
+
+def _edges(plan: Plan, setup: ScoreSetup, conv: Convention, options: ScoreOptions) -> dict[str, np.ndarray]:
+    given = {q: options.bins(q) or conv.bins(q) for q in ("speed", "acceleration")}
     edges = {q: reference_edges(*b) for q, b in given.items() if b is not None}
     auto = [q for q, b in given.items() if b is None]
     if auto:
         ref_files = [plan.files[plan.reference][s] for s in plan.names]
-        probes = run(probe_ranges, [(p, setup) for p in ref_files], jobs=jobs, dask_address=dask_address,
-                     progress=progress, desc="bin ranges")
+        probes = run(probe_ranges, [(p, setup) for p in ref_files], jobs=options.jobs,
+                     dask_address=options.dask_address, progress=options.progress, desc="bin ranges")
         for q in auto:
             vals = [p[q] for p in probes if "error" not in p and np.isfinite(p[q])]
             edges[q] = automatic_edges(max(vals) if vals else 1.0)

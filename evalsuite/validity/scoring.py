@@ -1,8 +1,8 @@
 """Scoring every condition once, keeping the per-segment records, and bootstrap replicates over segments.
 
-The per-file work is the scoring engine's own (:func:`evalsuite.metrics.engine.score_sequence` on the
-shared executor), with every default metric family plus beat alignment and the speech-gesture coupling
-family (the corpus brings the speech) and any extra family (FGD). The records are kept, so a bootstrap
+The scoring is the engine's own run (:func:`evalsuite.metrics.engine.score_plan`, as ``evalsuite score
+--corpus`` runs it), with every default metric family plus beat alignment and the speech-gesture coupling
+family (the corpus brings the speech) and any extra family (FGD). The task results are kept, so a bootstrap
 replicate is what ``evalsuite score`` would report on a resample of the segments, the same resample for
 every condition (paired). Two ways, one answer:
 
@@ -24,17 +24,14 @@ from typing import Any
 import numpy as np
 
 from evalsuite.errors import InputError
-from evalsuite.metrics.engine import ScoreResult, ScoreSetup, probe_ranges, reduce_results, score_sequence
+from evalsuite.metrics.engine import ScoreOptions, ScoreResult, plan_for, reduce_results, score_plan
 from evalsuite.metrics.families import (
     MetricFamily,
     ReduceContext,
     metric_index,
     percentile_ci,
-    registered_families,
     weighted_mean_boot,
 )
-from evalsuite.metrics.histograms import automatic_edges
-from evalsuite.metrics.planning import DEFAULT_GROUPS, plan_scoring, resolve_groups, resolve_metrics
 from evalsuite.parallel import run
 
 __all__ = ["Scored", "score_conditions", "bootstrap_table", "values_table"]
@@ -53,36 +50,17 @@ class Scored:
 def score_conditions(folders: dict[str, pathlib.Path], corpus_root: pathlib.Path, *,
                      extra_families: Sequence[MetricFamily] = (), jobs: int = 1, progress: bool = True) -> Scored:
     """Score every folder against ``folders['natural']`` with all metrics (beats and coupling from the corpus)."""
-    families = {**registered_families(), **{f.name: f for f in extra_families}}
-    metrics = resolve_metrics(None, False, families, True)
-    for fam in extra_families:
-        metrics += [m.name for m in fam.metrics if m.name not in metrics]
-    plan = plan_scoring(f"natural={folders['natural']}", [f"{n}={p}" for n, p in folders.items() if n != "natural"],
-                        corpus=corpus_root)
-    setup = ScoreSetup(joints=plan.joints, metrics=metrics, family_objects=tuple(families.values()),
-                       groups=resolve_groups(DEFAULT_GROUPS, plan.joints), figures=False)
-    probes = run(probe_ranges, [(plan.files[plan.reference][s], setup) for s in plan.names], jobs=jobs,
-                 progress=progress, desc="bin ranges")
-    for q in ("speed", "acceleration"):
-        vals = [p[q] for p in probes if "error" not in p and np.isfinite(p[q])]
-        setup.edges[q] = automatic_edges(max(vals) if vals else 1.0)
-    tasks, weights = [], []
-    for s in plan.names:
-        entries = [(c, plan.files[c][s]) for c in plan.conditions if s in plan.files[c]]
-        tasks.append((s, entries, plan.audio.get(s), setup, plan.segments.get(s)))
-        weights.append(len(entries))
-    results = run(score_sequence, tasks, jobs=jobs, progress=progress, weights=weights, desc="scoring",
-                  describe=_describe)
-    return Scored(reduce_results(plan, setup, _copies(results)), results)
+    options = ScoreOptions(corpus=corpus_root, figures=False, extra_families=tuple(extra_families), jobs=jobs,
+                           progress=progress)
+    plan = plan_for(f"natural={folders['natural']}", [f"{n}={p}" for n, p in folders.items() if n != "natural"],
+                    options)
+    result = score_plan(plan, options, keep_task_results=True)
+    return Scored(result, result.task_results)
 
 
 def _copies(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Task results with each record copied (a family's ``fold`` may pop what it has used from a record)."""
     return [{"name": r["name"], "records": {c: dict(rec) for c, rec in r["records"].items()}} for r in results]
-
-
-def _describe(task: tuple[Any, ...]) -> str:
-    return f"sequence {task[0]!r}"
 
 
 def _resampled(results: list[dict[str, Any]], draw: np.ndarray) -> list[dict[str, Any]]:
