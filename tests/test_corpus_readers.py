@@ -202,7 +202,7 @@ def test_headers_give_durations_without_loading(tmp_path):
 def test_layout_detection_is_explicit_about_ambiguity_and_unknown_folders(tmp_path):
     root = genea2023(tmp_path / "both")
     transcript(root / "1_wayne_0_1_1.TextGrid")
-    with pytest.raises(InputError, match=r"looks like several layouts \(genea2023, beat\); name one with layout="):
+    with pytest.raises(InputError, match=r"looks like several layouts \(genea2023, beat\); name one with load_corpus\(..., layout=NAME\)"):
         detect_layout(root)
     assert load_corpus(root, layout="genea2023").layout == "genea2023"
     (tmp_path / "empty").mkdir()

@@ -44,7 +44,7 @@ def detect_layout(path: str | os.PathLike[str]) -> str:
         return hits[0]
     if len(hits) > 1:
         raise InputError(f"the folder looks like several layouts ({', '.join(hits)}); name one with "
-                         "layout=... (CLI: --layout)", path=root)
+                         "load_corpus(..., layout=NAME) or `evalsuite corpus info|split --layout NAME`", path=root)
     if "folder" in LAYOUTS and LAYOUTS["folder"].detect(root):
         return "folder"
     raise InputError(f"unknown corpus layout: no layout recognises this folder. Known layouts: {_known()}",
