@@ -30,7 +30,7 @@ COMMANDS = {
     "corpus": "evalsuite.corpus.cli:corpus",
     "features": "evalsuite.features.cli:features",
     "validate-metrics": "evalsuite.validity.cli:validate_metrics",
-    "correlate": "evalsuite.analysis.correlate_cli:correlate",
+    "correlate": "evalsuite.analysis.correlate.cli:correlate",
 }
 
 

@@ -10,9 +10,16 @@ from click.testing import CliRunner
 from scipy import stats
 
 from evalsuite.analysis import correlate as corr
-from evalsuite.analysis.correlate import COLUMNS, correlate, kendall_b_rows, rank_correlations, spearman_rows
-from evalsuite.analysis.correlate_boot import ParticipantResampler
-from evalsuite.analysis.correlate_io import read_human, read_scores
+from evalsuite.analysis.correlate import (
+    COLUMNS,
+    ParticipantResampler,
+    correlate,
+    kendall_b_rows,
+    rank_correlations,
+    read_human,
+    read_scores,
+    spearman_rows,
+)
 from evalsuite.analysis.demo import sample_results_path
 from evalsuite.cli import main
 from evalsuite.errors import InputError
@@ -265,6 +272,26 @@ def test_plain_files_keep_na_as_a_name(tmp_path):
     assert s.attrs["plain"] and set(s["metric"]) == {"mos"}
 
 
+def test_pairwise_win_rates_by_hand(tmp_path):
+    """(wins + ties / 2) / judgements over a condition's comparisons; matched-vs-mismatched rows left out; a
+    comparison without judgements adds nothing (a condition with none has no value); ``line``: its first row."""
+    p = tmp_path / "pairwise.csv"
+    p.write_text("question,condition_a,condition_b,n_a,n_b,n_tie\n"
+                 "q,A,B,3,1,2\n"
+                 "q,A,A:mismatched,9,0,0\n"
+                 "q,B,C,0,0,0\n"
+                 "r,A,B,1,0,1\n")
+    h = read_human(p)
+    got = {(q, c): (v, line) for q, c, v, line in zip(h.question, h.condition, h.value, h.line)}
+    assert set(got) == {("q", "A"), ("q", "B"), ("q", "C"), ("r", "A"), ("r", "B")}
+    assert got[("q", "A")] == (4 / 6, 2) and got[("q", "B")] == (2 / 6, 2)
+    assert math.isnan(got[("q", "C")][0]) and got[("q", "C")][1] == 4
+    assert got[("r", "A")] == (1.5 / 2, 5) and got[("r", "B")] == (0.5 / 2, 5)
+    assert set(h.measure) == {"win_rate"}
+    kept = read_human(p, mismatch_suffix="")   # no suffix: X vs X:mismatched is a comparison like any other
+    assert dict(zip(zip(kept.question, kept.condition), kept.value))[("q", "A")] == (4 + 9) / (6 + 9)
+
+
 # --- the command on real `evalsuite score` and `evalsuite analyze` outputs -------------------------
 
 def invoke(*args):
@@ -336,6 +363,21 @@ def test_cli_elo_pairwise_and_participant_bootstrap(real, tmp_path):
             assert res.point(h.attrs["source"], q, m, list(g.condition)) == pytest.approx(g.value.to_numpy(), abs=1e-9)
             reps = res.replicates(h.attrs["source"], q, m, list(g.condition), 50, 1)
             assert reps.shape == (50, len(g)) and np.isfinite(reps).all()
+
+
+def test_cli_results_recomputes_with_the_analysis_options(real, tmp_path):
+    """--results reads the elo prior and the playback rule of the analysis beside HUMAN (its summary.json)."""
+    out = tmp_path / "analysis"
+    r = invoke("analyze", SAMPLE, "-o", out, "--bootstrap", "20", "--no-figures", "--elo-prior", "2",
+               "--implausible-playback", "0")
+    assert r.exit_code == 0, r.output
+    r = invoke("correlate", real / "scores" / "summary.csv", out / "elo.csv", "--results", SAMPLE, "--shared-only",
+               "--bootstrap", "20", "--no-figures", "-o", tmp_path / "c")
+    assert r.exit_code == 0, r.output
+    assert np.isfinite(pd.read_csv(tmp_path / "c" / "correlations.csv")["spearman_ci_low_participants"]).any()
+    res = ParticipantResampler.from_results(SAMPLE, elo_prior=2.0)
+    el = read_human(out / "elo.csv", measures=["elo"])
+    assert res.point("elo", "human_likeness", "elo", list(el.condition)) == pytest.approx(el.value.to_numpy())
 
 
 def test_cli_errors_are_one_line(real, tmp_path):
@@ -412,6 +454,26 @@ def test_analyze_scores_adds_the_report_section(real, tmp_path):
     assert "only in the scores, left out: Jitter" in r.output    # the anchor is not in the pairwise study
     t = pd.read_csv(out / "correlations.csv")
     assert np.isfinite(t["spearman_ci_low_participants"]).any()
+
+
+def test_report_resamples_elo_with_the_analysis_prior(real, tmp_path, monkeypatch):
+    from evalsuite.analysis.correlate import output
+
+    priors = []
+
+    class Recording(ParticipantResampler):
+        def __init__(self, data, mismatch_suffix=":mismatched", prior=0.1):
+            priors.append(prior)
+            super().__init__(data, mismatch_suffix, prior)
+
+    monkeypatch.setattr(output, "ParticipantResampler", Recording)
+    summary = pd.read_csv(real / "scores" / "summary.csv", keep_default_na=False)
+    few = tmp_path / "summary.csv"
+    summary[summary.metric.isin(["ape", "cca"])].to_csv(few, index=False)
+    r = invoke("analyze", SAMPLE, "-o", tmp_path / "r", "--bootstrap", "20", "--no-figures", "--elo-prior", "2",
+               "--scores", few)
+    assert r.exit_code == 0, r.output
+    assert priors == [2.0]
 
 
 def test_blind_analysis_section_shows_no_real_names(real, tmp_path):

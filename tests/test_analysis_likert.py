@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from evalsuite.analysis.likert import cronbach_alpha, likert_tables
+from evalsuite.analysis.likert import cronbach_alpha, likert_tables, participant_scores, statement_matrix
 
 
 def alpha_from_covariances(x):
@@ -33,6 +33,22 @@ def make_likert(scores):
             rows.append({"participant": p, "session": "s" + p, "page": "pg_" + c, "condition": c,
                          "question": f"i{j}", "scale": "S", "value": float(v)})
     return pd.DataFrame(rows)
+
+
+def test_participant_scores_average_statements_then_units():
+    """A unit's score is the mean of its statements; a participant who rated a condition on two pages counts
+    once, with the mean of the two unit scores; likert_means' mean is the mean over participants."""
+    rows = make_likert({("p1", "A"): [4, 2], ("p2", "A"): [5, 5], ("p1", "B"): [1, 2]})
+    second_page = make_likert({("p1", "A"): [1, 1]}).assign(page="pg_A2")
+    lk = pd.concat([rows, second_page], ignore_index=True)
+    wide = statement_matrix(lk)
+    assert list(wide.columns) == ["i0", "i1"] and len(wide) == 4
+    scores = participant_scores(wide)
+    assert scores.to_dict("records") == [{"participant": "p1", "condition": "A", "score": (3 + 1) / 2},
+                                         {"participant": "p1", "condition": "B", "score": 1.5},
+                                         {"participant": "p2", "condition": "A", "score": 5.0}]
+    means = likert_tables(lk)["means"].set_index("condition")
+    assert means.loc["A", "mean"] == (2 + 5) / 2 and means.loc["A", "n_participants"] == 2
 
 
 def test_anova_rm_anova_and_t_tests_by_hand():

@@ -10,6 +10,7 @@ from evalsuite.analysis.pairwise import (
     barnard_p,
     binomial_p,
     holm,
+    is_mismatch,
     mismatch_tables,
     pairwise_counts,
     pairwise_table,
@@ -184,6 +185,14 @@ def barnard_by_enumeration(x1, n1, x2, n2, grid=2001):
 def test_barnard_against_enumeration(x1, n1, x2, n2):
     p = barnard_p([[x1, x2], [n1 - x1, n2 - x2]])
     assert p == pytest.approx(barnard_by_enumeration(x1, n1, x2, n2), abs=2e-4)
+
+
+def test_is_mismatch_marks_x_against_x_plus_suffix_either_way():
+    a = pd.Series(["A", "A:mismatched", "A", "B", "A"])
+    b = pd.Series(["A:mismatched", "A", "B", "A:mismatched", "A:other"])
+    assert is_mismatch(a, b).tolist() == [True, True, False, False, False]
+    assert is_mismatch(a, b, ":other").tolist() == [False, False, False, False, True]
+    assert is_mismatch(a, b, "").tolist() == [False] * 5
 
 
 def test_mismatch_tables_split_ties_and_barnard_holm():

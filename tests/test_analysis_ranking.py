@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 from scipy import optimize
 
-from evalsuite.analysis.ranking import bradley_terry, elo_table, win_matrices
+from evalsuite.analysis.ranking import PLAIN_WEIGHTS, bradley_terry, elo_table, win_counts, win_matrices
 
 
 def battles(spec):
@@ -49,6 +49,25 @@ def test_weights_strong_weak_tie():
     assert parts == ["p1", "p2"]
     assert W[0].tolist() == [[0, 4], [2, 0]]
     assert W[1].tolist() == [[0, 1], [1, 0]]
+
+
+def test_plain_win_counts_give_elo_tables_win_rate():
+    """With PLAIN_WEIGHTS a strong, a weak and a plain win each count 1 and a tie half a win each way; elo.csv's
+    win_rate is wins / judgements of these counts (A: 3 of 5, B: 2.5 of 5, C: a tie and a loss, 0.5 of 2)."""
+    df = battles([("p1", "A", "B", "a", "strong", 1), ("p1", "B", "A", "a", "weak", 1),
+                  ("p2", "A", "B", "tie", "", 1), ("p2", "A", "B", "a", "", 1),
+                  ("p2", "C", "A", "tie", "", 1), ("p1", "C", "B", "b", "", 1)])
+    parts, W = win_matrices(df, ["A", "B", "C"], PLAIN_WEIGHTS)
+    assert parts == ["p1", "p2"]
+    assert W[0].tolist() == [[0, 1, 0], [1, 0, 1], [0, 0, 0]]
+    assert W[1].tolist() == [[0, 1.5, 0.5], [0.5, 0, 0], [0.5, 0, 0]]
+    wins, judged = win_counts(W)
+    assert wins.tolist() == [[1, 2, 0], [2, 0.5, 0.5]] and judged.tolist() == [[2, 3, 1], [3, 2, 1]]
+    total_wins, total = win_counts(W.sum(axis=0))
+    assert total_wins.tolist() == [3, 2.5, 0.5] and total.tolist() == [5, 5, 2]
+    table = elo_table(df, n_boot=0).set_index("condition")
+    assert table["win_rate"].to_dict() == {"A": 3 / 5, "B": 2.5 / 5, "C": 0.5 / 2}
+    assert table["n_judgements"].to_dict() == {"A": 5, "B": 5, "C": 2}
 
 
 def test_bootstrap_resamples_participants_seeded():

@@ -95,7 +95,7 @@ def analyze(ctx, results, out_dir, study, tie_policy, ci_method, holm_per_questi
     if not results.is_file():
         raise InputError("file not found (expected a results.csv or battles CSV)", path=results)
     if scores is not None:
-        from evalsuite.analysis.correlate_io import read_scores
+        from evalsuite.analysis.correlate.io import read_scores
 
         read_scores(scores)  # a malformed file stops here, before any statistic is computed
     given = {"tie_policy": tie_policy, "attention_fails": attention_fails, "n_boot": n_boot, "seed": seed,

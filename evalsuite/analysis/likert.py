@@ -71,11 +71,26 @@ def rm_anova(Y) -> tuple[float, float, float, float]:
     return float(F), float(df1), float(df2), float(stats.f.sf(F, df1, df2))
 
 
+def statement_matrix(lk: pd.DataFrame) -> pd.DataFrame:
+    """Response units x statements of one scale's likert rows: index :data:`UNIT`, one column per statement
+    (``question``), the unit's answer (a statement answered twice on a page: the mean)."""
+    return lk.pivot_table(index=UNIT, columns="question", values="value", aggfunc="mean")
+
+
+def participant_scores(wide: pd.DataFrame) -> pd.DataFrame:
+    """Participant-level scale scores from a :func:`statement_matrix`: a unit's score is the mean of its
+    statements, a participant's score for a condition the mean of their unit scores. Columns
+    ``participant, condition, score``, sorted by participant then condition. ``likert_means.csv``'s ``mean``
+    is the mean of these scores over the participants."""
+    unit_score = wide.mean(axis=1).rename("score").reset_index()
+    return unit_score.groupby(["participant", "condition"])["score"].mean().reset_index()
+
+
 def likert_tables(lk: pd.DataFrame, alpha: float = 0.05) -> dict:
     """All Likert tables: ``reliability``, ``means``, ``anova``, ``posthoc`` (DataFrames)."""
     rel, means, anova, post = [], [], [], []
     for scale, g in lk.groupby("scale", sort=True):
-        wide = g.pivot_table(index=UNIT, columns="question", values="value", aggfunc="mean")
+        wide = statement_matrix(g)
         complete = wide.dropna()
         a = cronbach_alpha(complete.to_numpy())
         note = ""
@@ -88,8 +103,7 @@ def likert_tables(lk: pd.DataFrame, alpha: float = 0.05) -> dict:
         rel.append({"scale": scale, "n_items": wide.shape[1], "n_units": len(complete),
                     "alpha": a, "note": note})
 
-        unit_score = wide.mean(axis=1).rename("score").reset_index()
-        scores = unit_score.groupby(["participant", "condition"])["score"].mean().reset_index()
+        scores = participant_scores(wide)
         conds = sorted(scores["condition"].unique())
         for c in conds:
             v = scores.loc[scores["condition"] == c, "score"].to_numpy()

@@ -224,6 +224,15 @@ def mismatch_pairs(conditions, suffix: str = ":mismatched"):
     return {c: c + suffix for c in sorted(conds) if not c.endswith(suffix) and c + suffix in conds}
 
 
+def is_mismatch(a: pd.Series, b: pd.Series, suffix: str = ":mismatched") -> pd.Series:
+    """True where a comparison of ``a`` with ``b`` (condition names, aligned Series) is ``X`` vs ``X + suffix``:
+    matched vs mismatched, not a comparison between two systems (left out of rankings and win rates). All
+    False for an empty ``suffix``."""
+    if not suffix:
+        return pd.Series(False, index=a.index)
+    return (b == a + suffix) | (a == b + suffix)
+
+
 BARNARD_EXACT_MAX_CELLS = 250_000
 BARNARD_EXACT = "Barnard exact"
 BARNARD_ASYMPTOTIC = "pooled z (asymptotic Barnard)"

@@ -42,11 +42,16 @@ from evalsuite.analysis.pairwise import orient
 
 SAMPLERS = ("multinomial", "leaderboard")
 RUNAWAY_PRIOR = 1e-6
+# (strong win, any other win, tie to each side): the Leaderboard's weights of the fit, and plain counts with a
+# tie half a win each way (the ``win_rate`` of elo.csv).
+LEADERBOARD_WEIGHTS = (4.0, 2.0, 1.0)
+PLAIN_WEIGHTS = (1.0, 1.0, 0.5)
 
 
-def win_matrices(pw: pd.DataFrame, conditions):
+def win_matrices(pw: pd.DataFrame, conditions, weights: tuple[float, float, float] = LEADERBOARD_WEIGHTS):
     """Per-participant weighted win matrices: returns ``(participants, W)`` with
-    ``W[p, i, j]`` = weight of condition ``i`` beating ``j`` in participant ``p``'s judgements."""
+    ``W[p, i, j]`` = weight of condition ``i`` beating ``j`` in participant ``p``'s judgements
+    (``weights``: a strong win, any other win, a tie to each side; participants sorted)."""
     idx = {c: i for i, c in enumerate(conditions)}
     parts = sorted(pw["participant"].unique())
     pidx = {p: i for i, p in enumerate(parts)}
@@ -54,14 +59,28 @@ def win_matrices(pw: pd.DataFrame, conditions):
     a = o["condition_a"].map(idx).to_numpy()
     b = o["condition_b"].map(idx).to_numpy()
     p = o["participant"].map(pidx).to_numpy()
-    win = np.where(o["strength"] == "strong", 4.0, 2.0)
+    strong, plain, tie = weights
+    win = np.where(o["strength"] == "strong", strong, plain)
     ans = o["answer"].to_numpy()
     C = len(conditions)
     W = np.zeros((len(parts), C, C))
-    # Vectorised scatter-add: winner row, loser column; ties add 1 both ways.
-    np.add.at(W, (p, a, b), np.where(ans == "a", win, np.where(ans == "tie", 1.0, 0.0)))
-    np.add.at(W, (p, b, a), np.where(ans == "b", win, np.where(ans == "tie", 1.0, 0.0)))
+    # Vectorised scatter-add: winner row, loser column; ties add the tie weight both ways.
+    np.add.at(W, (p, a, b), np.where(ans == "a", win, np.where(ans == "tie", tie, 0.0)))
+    np.add.at(W, (p, b, a), np.where(ans == "b", win, np.where(ans == "tie", tie, 0.0)))
     return parts, W
+
+
+def win_counts(W) -> tuple[np.ndarray, np.ndarray]:
+    """``(wins, judgements)`` of each condition from win matrices ``W`` of shape ``(..., C, C)`` made with
+    :data:`PLAIN_WEIGHTS`: ``wins_i = sum_j W_ij`` (a tie half a win) and ``judgements_i = sum_j (W_ij + W_ji)``
+    (each judgement adds 1 to ``W_ij + W_ji``), both of shape ``(..., C)``. The win rate is their ratio."""
+    W = np.asarray(W, dtype=float)
+    return W.sum(axis=-1), (W + np.swapaxes(W, -1, -2)).sum(axis=-1)
+
+
+def to_elo(log10_strength):
+    """Elo scale of :func:`bradley_terry`'s log10 strengths: ``400 log10(p_i) + 1000`` (mean 1000)."""
+    return 400 * log10_strength + 1000
 
 
 def mle_exists(W) -> np.ndarray:
@@ -166,12 +185,7 @@ def elo_table(pw: pd.DataFrame, *, n_boot: int = 1000, seed: int = 42, prior: fl
         conds = sorted(set(g["condition_a"]) | set(g["condition_b"]))
         parts, Wp = win_matrices(g, conds)
         W = Wp.sum(axis=0)
-        n_judge = np.array([((g["condition_a"] == c) | (g["condition_b"] == c)).sum() for c in conds])
-        o = orient(g)
-        wins = np.array([((o["condition_a"] == c) & (o["answer"] == "a")).sum()
-                         + ((o["condition_b"] == c) & (o["answer"] == "b")).sum()
-                         + 0.5 * (((o["condition_a"] == c) | (o["condition_b"] == c)) & (o["answer"] == "tie")).sum()
-                         for c in conds])
+        wins, n_judge = win_counts(win_matrices(g, conds, PLAIN_WEIGHTS)[1].sum(axis=0))
         nan = np.full(len(conds), math.nan)
         elo, lo, hi, med = nan, nan, nan, nan
         notes = []
@@ -181,7 +195,7 @@ def elo_table(pw: pd.DataFrame, *, n_boot: int = 1000, seed: int = 42, prior: fl
             notes.append("no finite maximum-likelihood estimate (a set of conditions never lost to, or "
                          "never beat, the rest): use --elo-prior > 0")
         else:
-            elo = 400 * bradley_terry(W, prior) + 1000
+            elo = to_elo(bradley_terry(W, prior))
             if n_boot > 0 and len(parts) >= 2:
                 boot, runaway = _bootstrap(W, Wp, n_boot, seed, prior, sampler, q, progress)
                 lo, hi = np.percentile(boot, [100 * alpha / 2, 100 * (1 - alpha / 2)], axis=0)

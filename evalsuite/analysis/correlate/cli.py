@@ -25,13 +25,15 @@ def _renames(values) -> dict[str, str]:
 
 
 def _analysis_options(human: pathlib.Path) -> dict:
-    """The exclusion options of the ``evalsuite analyze`` run that wrote ``human`` (its summary.json)."""
+    """The options of the ``evalsuite analyze`` run that wrote ``human`` (its summary.json) that change a
+    recomputed human measure: the exclusions, and the prior of the Elo fit."""
     path = human.parent / "summary.json"
     try:
         opts = json.loads(path.read_text(encoding="utf-8")).get("options", {})
     except (OSError, ValueError, AttributeError):
         return {}
-    keys = ("attention_fails", "keep_incomplete", "duplicates", "mushra_screening", "study")
+    keys = ("attention_fails", "keep_incomplete", "duplicates", "mushra_screening", "implausible_playback", "study",
+            "elo_prior")
     return {k: opts[k] for k in keys if k in opts} if isinstance(opts, dict) else {}
 
 
@@ -107,11 +109,11 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
       evalsuite correlate scores/summary.csv analysis/ratings.csv --measure median \\
           --rename natural=NA --results results.csv -o correlations/
     """
-    from evalsuite.analysis.correlate import add_distance_to_natural
-    from evalsuite.analysis.correlate import correlate as run
-    from evalsuite.analysis.correlate_boot import ParticipantResampler
-    from evalsuite.analysis.correlate_io import read_human, read_scores
-    from evalsuite.analysis.correlate_out import display_table, group_notes, write_notes, write_outputs
+    from evalsuite.analysis.correlate.bootstrap import ParticipantResampler
+    from evalsuite.analysis.correlate.io import read_human, read_scores
+    from evalsuite.analysis.correlate.output import display_table, group_notes, write_notes, write_outputs
+    from evalsuite.analysis.correlate.table import add_distance_to_natural
+    from evalsuite.analysis.correlate.table import correlate as run
 
     metric_names = _names(metrics)
     s = read_scores(scores)

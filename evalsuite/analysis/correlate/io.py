@@ -26,8 +26,11 @@ import csv
 import math
 import pathlib
 
+import numpy as np
 import pandas as pd
 
+from evalsuite.analysis.pairwise import is_mismatch
+from evalsuite.analysis.ranking import PLAIN_WEIGHTS, win_counts
 from evalsuite.errors import InputError
 
 __all__ = ["read_scores", "read_human", "HUMAN_MEASURES"]
@@ -164,21 +167,30 @@ def detect_human(columns) -> str:
 
 
 def _win_rates(df: pd.DataFrame, path, suffix: str) -> pd.DataFrame:
+    """Per question and condition of ``pairwise.csv``, the win rate of elo.csv's ``win_rate``: each row's counts
+    as a plain win matrix (:data:`~evalsuite.analysis.ranking.PLAIN_WEIGHTS`: a win 1, a tie half each way),
+    divided by :func:`~evalsuite.analysis.ranking.win_counts`; matched-vs-mismatched rows left out. ``line``: the
+    first row that names the condition."""
     counts = {c: _numbers(df, c, path, empty_ok=False) for c in ("n_a", "n_b", "n_tie")}
-    rows: dict[tuple[str, str], list[float]] = {}
-    for i, r in df.iterrows():
-        a, b = r["condition_a"], r["condition_b"]
-        if suffix and (b == a + suffix or a == b + suffix):
-            continue  # matched vs mismatched: not a comparison between systems
-        na, nb, nt = counts["n_a"][i], counts["n_b"][i], counts["n_tie"][i]
-        for cond, wins in ((a, na + nt / 2), (b, nb + nt / 2)):
-            acc = rows.setdefault((r["question"], cond), [0.0, 0.0, r["line"]])
-            acc[0] += wins
-            acc[1] += na + nb + nt
-    return pd.DataFrame([{"question": q, "measure": "win_rate", "condition": c,
-                          "value": w / n if n else math.nan, "line": line}
-                         for (q, c), (w, n, line) in sorted(rows.items())],
-                        columns=["question", "measure", "condition", "value", "line"])
+    _, win, tie = PLAIN_WEIGHTS
+    rows = []
+    kept = df[~is_mismatch(df["condition_a"], df["condition_b"], suffix)]
+    for question, g in kept.groupby("question", sort=True):
+        conds = sorted(set(g["condition_a"]) | set(g["condition_b"]))
+        idx = {c: i for i, c in enumerate(conds)}
+        a, b = g["condition_a"].map(idx).to_numpy(), g["condition_b"].map(idx).to_numpy()
+        na, nb, nt = (counts[c][g.index].to_numpy() for c in ("n_a", "n_b", "n_tie"))
+        W = np.zeros((len(conds), len(conds)))
+        np.add.at(W, (a, b), win * na + tie * nt)
+        np.add.at(W, (b, a), win * nb + tie * nt)
+        wins, judged = win_counts(W)
+        first = pd.concat([g[["condition_a", "line"]].set_axis(["condition", "line"], axis=1),
+                           g[["condition_b", "line"]].set_axis(["condition", "line"], axis=1)])
+        line = first.groupby("condition")["line"].min()
+        rows += [{"question": question, "measure": "win_rate", "condition": c,
+                  "value": wins[i] / judged[i] if judged[i] else math.nan, "line": int(line[c])}
+                 for i, c in enumerate(conds)]
+    return pd.DataFrame(rows, columns=["question", "measure", "condition", "value", "line"])
 
 
 def read_human(path, measures=None, questions=None, mismatch_suffix: str = ":mismatched") -> pd.DataFrame:

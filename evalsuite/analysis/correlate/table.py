@@ -1,26 +1,9 @@
-"""Objective metrics against human judgements across conditions: ``evalsuite correlate``.
+"""The ``correlations.csv`` table: every metric against every human measure across conditions.
 
-For every metric (a ``condition, metric, value`` table, e.g. ``summary.csv`` of ``evalsuite score``)
-and every human measure (a ``condition, value`` per question and measure: MUSHRA medians or means,
-Likert means, Elo, pairwise win rates; see :mod:`evalsuite.analysis.correlate_io`), over the
-conditions both have:
-
-- Spearman's rho and Kendall's tau-b, exactly ``scipy.stats.spearmanr(x, y)`` and
-  ``scipy.stats.kendalltau(x, y, variant="b")`` (tau-b corrects for ties), with two-sided p-values that are
-  exact for small n (:func:`rank_p_values`; ``spearman_p_method`` / ``kendall_p_method`` say which);
-- percentile bootstrap CIs from ``n_boot`` resamples of the **conditions** with replacement (seeded;
-  resamples in which either side is constant have no correlation and are left out, the row says how
-  many);
-- optionally percentile CIs from resamples of the **participants** (``participants=``, a
-  :class:`~evalsuite.analysis.correlate_boot.ParticipantResampler` built from the study's results):
-  the human measure is recomputed on each resample, the metric values stay fixed;
-- the metric's direction (``better``: from the metric registry, else the scores' own ``better``
-  column) and ``agrees``: whether the sign of rho is the one a valid metric would give (human measures
-  are higher-is-better: a lower-is-better metric should correlate negatively). Empty for
-  "closer to natural" metrics, whose sign says nothing by itself, and for unknown metrics.
-
-Undefined correlations (fewer than 3 conditions with a value, a constant metric or human measure) give
-a row with empty numbers and a ``note``, never an exception.
+One row per metric and human measure (columns :data:`COLUMNS`): n, rho and tau-b with their p-values
+(:mod:`~evalsuite.analysis.correlate.statistics`), condition and participant bootstrap CIs
+(:mod:`~evalsuite.analysis.correlate.bootstrap`), the metric's direction and whether the sign agrees with it;
+an undefined correlation gives a row with empty numbers and a ``note``.
 """
 from __future__ import annotations
 
@@ -30,10 +13,12 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from evalsuite.analysis.correlate.bootstrap import condition_bootstrap
+from evalsuite.analysis.correlate.statistics import percentile, rank_p_values, replicates
 from evalsuite.errors import InputError
 
-__all__ = ["COLUMNS", "EXACT_MAX_N", "correlate", "rank_correlations", "rank_p_values", "spearman_rows",
-           "kendall_b_rows", "metric_direction", "add_distance_to_natural"]
+__all__ = ["COLUMNS", "MIN_CONDITIONS", "correlate", "metric_direction", "add_distance_to_natural",
+           "check_conditions", "human_label"]
 
 COLUMNS = ["metric", "human_measure", "n", "spearman_rho", "spearman_p", "spearman_ci_low", "spearman_ci_high",
            "kendall_tau_b", "kendall_p", "kendall_ci_low", "kendall_ci_high", "question", "measure", "better",
@@ -41,109 +26,6 @@ COLUMNS = ["metric", "human_measure", "n", "spearman_rho", "spearman_p", "spearm
            "kendall_ci_low_participants", "kendall_ci_high_participants", "conditions", "note",
            "spearman_p_method", "kendall_p_method"]
 MIN_CONDITIONS = 3
-EXACT_MAX_N = 8  # every one of the n! orderings is enumerated up to here (8! = 40,320; 9! takes seconds a row)
-EXACT, T_APPROX, NORMAL_APPROX = "exact", "t approximation", "normal approximation"
-_CHUNK = 256
-
-
-def rank_correlations(x, y) -> tuple[float, float, float, float]:
-    """``(rho, p_rho, tau_b, p_tau)``: ``scipy.stats.spearmanr`` and ``kendalltau(variant="b")`` of two
-    equally long vectors, with the p-values of :func:`rank_p_values`; all NaN when either is constant (no
-    rank correlation exists)."""
-    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    if x.size < 2 or np.all(x == x[0]) or np.all(y == y[0]):
-        return (math.nan,) * 4
-    p_rho, _, p_tau, _ = rank_p_values(x, y)
-    return float(stats.spearmanr(x, y).statistic), p_rho, float(stats.kendalltau(x, y, variant="b").statistic), p_tau
-
-
-def rank_p_values(x, y) -> tuple[float, str, float, str]:
-    """Two-sided p-values of Spearman's rho and Kendall's tau-b and how each was computed:
-    ``(p_rho, method, p_tau, method)``, ``x``, ``y`` of shape ``(n,)``, neither constant.
-
-    - ``"exact"``, n <= :data:`EXACT_MAX_N`: the permutation distribution over all n! orderings of y
-      against x, ``p = min(1, 2 min(P(T* >= T), P(T* <= T)))`` (``scipy.stats.permutation_test((y,), ...,
-      permutation_type="pairings", n_resamples=inf)``; for rho, ``scipy.stats.pearsonr`` of the average ranks with
-      ``method=PermutationMethod(n_resamples=inf)``). Ties are kept, so this is exact with ties too;
-    - tau-b without ties up to n = 33 is also ``"exact"``: scipy's exact null distribution
-      (``kendalltau(method="exact")``);
-    - otherwise ``"t approximation"`` for rho (``t = rho sqrt((n - 2) / (1 - rho^2))``, n - 2 degrees of
-      freedom: ``spearmanr``) and ``"normal approximation"`` for tau-b (tie-corrected variance: ``kendalltau``).
-    """
-    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    n = x.size
-    ties = np.unique(x).size < n or np.unique(y).size < n
-    if n <= EXACT_MAX_N:
-        exhaustive = stats.PermutationMethod(n_resamples=np.inf)
-        p_rho = stats.pearsonr(stats.rankdata(x), stats.rankdata(y), method=exhaustive).pvalue
-        rho_method = EXACT
-    else:
-        p_rho, rho_method = stats.spearmanr(x, y).pvalue, T_APPROX
-    if not ties and n <= 33:
-        p_tau, tau_method = stats.kendalltau(x, y, variant="b", method="exact").pvalue, EXACT
-    elif n <= EXACT_MAX_N:
-        def tau_b(y_perm, axis=-1):  # y_perm: (..., n) orderings of y against the fixed x
-            rows = np.reshape(y_perm, (-1, n))
-            return kendall_b_rows(np.broadcast_to(x, rows.shape), rows).reshape(np.shape(y_perm)[:-1])
-
-        p_tau = stats.permutation_test((y,), tau_b, permutation_type="pairings", n_resamples=np.inf,
-                                       vectorized=True).pvalue
-        tau_method = EXACT
-    else:
-        p_tau, tau_method = stats.kendalltau(x, y, variant="b", method="asymptotic").pvalue, NORMAL_APPROX
-    return float(p_rho), rho_method, float(p_tau), tau_method
-
-
-def spearman_rows(X, Y) -> np.ndarray:
-    """Spearman's rho of each row pair of ``X``, ``Y`` (``(B, n)``; average ranks for ties, as scipy):
-    the Pearson correlation of the ranks. NaN for a constant row."""
-    rx = stats.rankdata(X, axis=1)
-    ry = stats.rankdata(Y, axis=1)
-    rx -= rx.mean(axis=1, keepdims=True)
-    ry -= ry.mean(axis=1, keepdims=True)
-    den = np.sqrt((rx * rx).sum(axis=1) * (ry * ry).sum(axis=1))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        r = np.where(den > 0, (rx * ry).sum(axis=1) / den, np.nan)
-    return np.clip(r, -1.0, 1.0)
-
-
-def kendall_b_rows(X, Y) -> np.ndarray:
-    """Kendall's tau-b of each row pair: ``(n_c - n_d) / sqrt((n0 - n_x) (n0 - n_y))`` over all pairs
-    ``i < j``, with ``n_x``, ``n_y`` the pairs tied in X, in Y. NaN for a constant row."""
-    X, Y = np.asarray(X, dtype=float), np.asarray(Y, dtype=float)
-    i, j = np.triu_indices(X.shape[1], 1)
-    sx = np.sign(X[:, i] - X[:, j])
-    sy = np.sign(Y[:, i] - Y[:, j])
-    den = np.sqrt((sx != 0).sum(axis=1).astype(float) * (sy != 0).sum(axis=1))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = np.where(den > 0, (sx * sy).sum(axis=1) / den, np.nan)
-    return np.clip(t, -1.0, 1.0)
-
-
-def _replicates(X, Y) -> tuple[np.ndarray, np.ndarray]:
-    rho, tau = [], []
-    for s in range(0, X.shape[0], _CHUNK):
-        rho.append(spearman_rows(X[s:s + _CHUNK], Y[s:s + _CHUNK]))
-        tau.append(kendall_b_rows(X[s:s + _CHUNK], Y[s:s + _CHUNK]))
-    return np.concatenate(rho), np.concatenate(tau)
-
-
-def _percentile(values, alpha: float) -> tuple[float, float]:
-    v = values[np.isfinite(values)]
-    if v.size == 0:
-        return (math.nan, math.nan)
-    lo, hi = np.percentile(v, [100 * alpha / 2, 100 * (1 - alpha / 2)])
-    return float(lo), float(hi)
-
-
-def condition_bootstrap(x, y, n_boot: int, seed: int, alpha: float = 0.05):
-    """Percentile CIs of rho and tau-b from ``n_boot`` resamples of the conditions (pairs ``(x_i, y_i)``
-    drawn with replacement, ``numpy.random.default_rng(seed)``). Returns
-    ``(rho_lo, rho_hi, tau_lo, tau_hi, n_undefined)``."""
-    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    idx = np.random.default_rng(seed).integers(0, x.size, size=(n_boot, x.size))
-    rho, tau = _replicates(x[idx], y[idx])
-    return (*_percentile(rho, alpha), *_percentile(tau, alpha), int((~np.isfinite(rho)).sum()))
 
 
 def _registry_directions() -> dict[str, str]:
@@ -199,11 +81,11 @@ def correlate(scores: pd.DataFrame, human: pd.DataFrame, *, n_boot: int = 1000, 
               alpha: float = 0.05, participants=None, shared_only: bool = False, human_higher: bool = True,
               notes: list | None = None, natural: str | None = None, row_notes: list | None = None
               ) -> pd.DataFrame:
-    """The ``correlations.csv`` table: one row per metric and human measure (module docstring).
+    """The ``correlations.csv`` table: one row per metric and human measure (the package docstring).
 
     ``scores``: columns ``condition, metric, value`` (optional ``better``); ``human``: columns
     ``condition, value`` and optional ``question``, ``measure`` (as read by
-    :func:`~evalsuite.analysis.correlate_io.read_human`). Conditions must be the same in both (an
+    :func:`~evalsuite.analysis.correlate.io.read_human`). Conditions must be the same in both (an
     :class:`InputError` names those that are not) unless ``shared_only``; at least 3 must be shared.
     ``participants``: optional resampler for participant-bootstrap CIs. Notes about the inputs (left-out
     conditions) are appended to ``notes`` when given; the rows' notes to ``row_notes`` as ``(kind, metric,
@@ -324,9 +206,9 @@ def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, see
             if H is None:
                 notes.append(("no participant bootstrap", f"no participant bootstrap for {measure!r}"))
             else:
-                rr, tt = _replicates(np.broadcast_to(x, H.shape), H)
-                (row["spearman_ci_low_participants"], row["spearman_ci_high_participants"]) = _percentile(rr, alpha)
-                (row["kendall_ci_low_participants"], row["kendall_ci_high_participants"]) = _percentile(tt, alpha)
+                rr, tt = replicates(np.broadcast_to(x, H.shape), H)
+                (row["spearman_ci_low_participants"], row["spearman_ci_high_participants"]) = percentile(rr, alpha)
+                (row["kendall_ci_low_participants"], row["kendall_ci_high_participants"]) = percentile(tt, alpha)
                 _snap(row, "spearman_rho", "spearman_ci_low_participants", "spearman_ci_high_participants")
                 _snap(row, "kendall_tau_b", "kendall_ci_low_participants", "kendall_ci_high_participants")
                 bad = int((~np.isfinite(rr)).sum())

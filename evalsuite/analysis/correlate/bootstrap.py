@@ -1,15 +1,21 @@
-"""Participant bootstrap of the human measures (for ``evalsuite correlate --results``).
+"""Bootstrap CIs of ``evalsuite correlate``: resampling the conditions, and the participants.
 
-Judgements of one participant are not independent, so the uncertainty of a human measure comes from
-the participants: each resample draws the participants with replacement (seeded,
-``numpy.random.default_rng(seed).multinomial``, as the Elo bootstrap of ``evalsuite analyze``) and
-recomputes the measure exactly as ``evalsuite analyze`` computes it on the whole sample:
+:func:`condition_bootstrap` draws the ``(metric, human)`` pairs of the conditions with replacement.
 
-- ``median``, ``mean`` (``ratings.csv``): of the resampled participants' MUSHRA ratings;
-- ``mean`` (``likert_means.csv``): of participant-level scale scores (unit score = mean of the scale's
-  statements, averaged per participant and condition);
-- ``win_rate``: (wins + ties / 2) / judgements, matched-vs-mismatched comparisons left out;
-- ``elo``: the Bradley-Terry fit of :func:`evalsuite.analysis.ranking.bradley_terry` (same prior).
+:class:`ParticipantResampler` is for ``--results``: judgements of one participant are not independent, so the
+uncertainty of a human measure comes from the participants. Each resample draws the participants with
+replacement (seeded, ``numpy.random.default_rng(seed).multinomial``, as the Elo bootstrap of ``evalsuite
+analyze``) and recomputes the measure as ``evalsuite analyze`` computes it on the whole sample, from the same
+per-participant quantities of the analysis modules:
+
+- ``median``, ``mean`` (``ratings.csv``, :func:`~evalsuite.analysis.ratings.rating_summary`): of the resampled
+  participants' MUSHRA ratings;
+- ``mean`` (``likert_means.csv``): of the participant-level scale scores of
+  :func:`~evalsuite.analysis.likert.participant_scores`;
+- ``win_rate``: (wins + ties / 2) / judgements from the plain win matrices of
+  :func:`~evalsuite.analysis.ranking.win_matrices` (:func:`~evalsuite.analysis.ranking.win_counts`),
+  matched-vs-mismatched comparisons left out (:func:`~evalsuite.analysis.pairwise.is_mismatch`);
+- ``elo``: the Bradley-Terry fit of :func:`~evalsuite.analysis.ranking.bradley_terry` (same prior).
 
 :meth:`ParticipantResampler.point` recomputes the measure on the full sample, so the command can check
 that the results file and the human table belong together.
@@ -21,13 +27,25 @@ import pathlib
 import numpy as np
 import pandas as pd
 
+from evalsuite.analysis.correlate.statistics import percentile, replicates
 from evalsuite.analysis.exclusions import apply_exclusions
 from evalsuite.analysis.io import read_any
-from evalsuite.analysis.likert import UNIT
-from evalsuite.analysis.ranking import bradley_terry, win_matrices
+from evalsuite.analysis.likert import participant_scores, statement_matrix
+from evalsuite.analysis.pairwise import is_mismatch
+from evalsuite.analysis.ranking import PLAIN_WEIGHTS, bradley_terry, to_elo, win_counts, win_matrices
 
-__all__ = ["ParticipantResampler"]
+__all__ = ["condition_bootstrap", "ParticipantResampler"]
 _CHUNK = 250
+
+
+def condition_bootstrap(x, y, n_boot: int, seed: int, alpha: float = 0.05):
+    """Percentile CIs of rho and tau-b from ``n_boot`` resamples of the conditions (pairs ``(x_i, y_i)``
+    drawn with replacement, ``numpy.random.default_rng(seed)``). Returns
+    ``(rho_lo, rho_hi, tau_lo, tau_hi, n_undefined)``."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    idx = np.random.default_rng(seed).integers(0, x.size, size=(n_boot, x.size))
+    rho, tau = replicates(x[idx], y[idx])
+    return (*percentile(rho, alpha), *percentile(tau, alpha), int((~np.isfinite(rho)).sum()))
 
 
 class ParticipantResampler:
@@ -45,13 +63,15 @@ class ParticipantResampler:
 
     @classmethod
     def from_results(cls, path, *, study=None, attention_fails: int = 2, keep_incomplete: bool = False,
-                     duplicates: str = "keep-first", mushra_screening: bool = True,
-                     mismatch_suffix: str = ":mismatched") -> ParticipantResampler:
-        """Read ``path`` (results.csv or battles CSV) and apply ``evalsuite analyze``'s exclusions."""
+                     duplicates: str = "keep-first", mushra_screening: bool = True, implausible_playback: int = 1,
+                     mismatch_suffix: str = ":mismatched", elo_prior: float = 0.1) -> ParticipantResampler:
+        """Read ``path`` (results.csv or battles CSV) and apply ``evalsuite analyze``'s exclusions (its options,
+        same defaults); ``elo_prior``: analyze's ``--elo-prior``."""
         raw = read_any(pathlib.Path(path), study=study)
         excl = apply_exclusions(raw, attention_fails=attention_fails, keep_incomplete=keep_incomplete,
-                                duplicates=duplicates, mushra_screening=mushra_screening)
-        return cls(excl.data, mismatch_suffix)
+                                duplicates=duplicates, mushra_screening=mushra_screening,
+                                implausible_playback=implausible_playback)
+        return cls(excl.data, mismatch_suffix, elo_prior)
 
     # --- per measure: (participants, f(counts (R, P)) -> (R, C)) -----------------------------------
 
@@ -63,11 +83,7 @@ class ParticipantResampler:
             return d[(d["page_type"] == "likert") & (d["scale"] == question)]
         if source in ("elo", "pairwise"):
             pw = d[(d["page_type"] == "pairwise") & (d["question"] == question)]
-            if self.suffix:
-                mism = (pw["condition_b"] == pw["condition_a"] + self.suffix) | (
-                    pw["condition_a"] == pw["condition_b"] + self.suffix)
-                pw = pw[~mism]
-            return pw
+            return pw[~is_mismatch(pw["condition_a"], pw["condition_b"], self.suffix)]
         return d.iloc[0:0]
 
     def _measure(self, source: str, question: str, measure: str, conditions):
@@ -109,17 +125,14 @@ class ParticipantResampler:
                 np.add.at(S, (sub["participant"].map(pidx), sub["condition"].map(cidx)), sub["value"].to_numpy(float))
                 np.add.at(N, (sub["participant"].map(pidx), sub["condition"].map(cidx)), 1.0)
             else:
-                wide = sub.pivot_table(index=UNIT, columns="question", values="value", aggfunc="mean")
-                unit = wide.mean(axis=1).rename("score").reset_index()
-                scores = unit.groupby(["participant", "condition"])["score"].mean().reset_index()
+                scores = participant_scores(statement_matrix(sub))
                 S = np.zeros((P, C))
                 N = np.zeros((P, C))
                 S[scores["participant"].map(pidx), scores["condition"].map(cidx)] = scores["score"].to_numpy(float)
                 N[scores["participant"].map(pidx), scores["condition"].map(cidx)] = 1.0
             return P, lambda counts: _ratio(counts @ S[:, cols], counts @ N[:, cols])
         if measure == "win_rate":
-            judged = _judgements(sub, every, pidx)
-            wins = _plain_wins(sub, every, pidx)
+            wins, judged = win_counts(win_matrices(sub, every, PLAIN_WEIGHTS)[1])   # (P, C) each
             return P, lambda counts: _ratio(counts @ wins[:, cols], counts @ judged[:, cols])
         if source == "elo" and measure == "elo":
             _, Wp = win_matrices(sub, every)
@@ -130,7 +143,7 @@ class ParticipantResampler:
                 out = []
                 for s in range(0, counts.shape[0], _CHUNK):
                     Wb = (counts[s:s + _CHUNK] @ flat).reshape(-1, C, C)
-                    out.append(400 * bradley_terry(np.concatenate([W[None], Wb]), self.prior)[1:] + 1000)
+                    out.append(to_elo(bradley_terry(np.concatenate([W[None], Wb]), self.prior)[1:]))
                 return np.concatenate(out)[:, cols]
             return P, elo
         return None
@@ -162,25 +175,3 @@ def _ratio(num, den):
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(den > 0, num / np.where(den > 0, den, 1), np.nan)
 
-
-def _oriented(sub: pd.DataFrame, every, pidx):
-    cidx = {c: i for i, c in enumerate(every)}
-    return (sub["participant"].map(pidx).to_numpy(), sub["condition_a"].map(cidx).to_numpy(),
-            sub["condition_b"].map(cidx).to_numpy(), sub["answer"].to_numpy())
-
-
-def _judgements(sub, every, pidx):
-    p, a, b, _ = _oriented(sub, every, pidx)
-    J = np.zeros((len(pidx), len(every)))
-    np.add.at(J, (p, a), 1.0)
-    np.add.at(J, (p, b), 1.0)
-    return J
-
-
-def _plain_wins(sub, every, pidx):
-    """Unweighted wins per participant and condition, a tie half a win each (elo.csv's ``win_rate``)."""
-    p, a, b, ans = _oriented(sub, every, pidx)
-    W = np.zeros((len(pidx), len(every)))
-    np.add.at(W, (p, a), np.where(ans == "a", 1.0, np.where(ans == "tie", 0.5, 0.0)))
-    np.add.at(W, (p, b), np.where(ans == "b", 1.0, np.where(ans == "tie", 0.5, 0.0)))
-    return W

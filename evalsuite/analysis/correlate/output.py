@@ -10,9 +10,10 @@ import numpy as np
 import pandas as pd
 
 from evalsuite.analysis import report
-from evalsuite.analysis.correlate import COLUMNS, EXACT_MAX_N, correlate
-from evalsuite.analysis.correlate_boot import ParticipantResampler
-from evalsuite.analysis.correlate_io import read_human, read_scores
+from evalsuite.analysis.correlate.bootstrap import ParticipantResampler
+from evalsuite.analysis.correlate.io import read_human, read_scores
+from evalsuite.analysis.correlate.statistics import EXACT_MAX_N
+from evalsuite.analysis.correlate.table import COLUMNS, correlate
 from evalsuite.errors import InputError
 
 __all__ = ["write_outputs", "display_table", "fig_scatter", "report_section", "group_notes", "write_notes"]
@@ -41,7 +42,7 @@ def _p_from(rho_method, tau_method) -> str:
 
 def group_notes(row_notes, examples: int = 3) -> list[str]:
     """One line per kind of note (``row_notes``: ``(kind, metric, human_measure, text)`` as collected by
-    :func:`~evalsuite.analysis.correlate.correlate`): how many rows have it and the first ``examples``."""
+    :func:`~evalsuite.analysis.correlate.table.correlate`): how many rows have it and the first ``examples``."""
     groups: dict[str, list[tuple[str, str, str]]] = {}
     for kind, metric, measure, text in row_notes:
         groups.setdefault(kind, []).append((metric, measure, text))
@@ -162,12 +163,12 @@ _REPORT_SOURCES = ("ratings", "likert_means", "elo")  # pairwise win rates = elo
 
 def report_section(scores_path, out_dir, data: pd.DataFrame, *, n_boot: int = 1000, seed: int = 42,
                    alpha: float = 0.05, figures: bool = True, mismatch_suffix: str = ":mismatched",
-                   codes: dict | None = None, echo=print) -> tuple[str, list[str]]:
+                   elo_prior: float = 0.1, codes: dict | None = None, echo=print) -> tuple[str, list[str]]:
     """``("Metrics vs humans", [html])`` for ``evalsuite analyze --scores``: every metric of
     ``scores_path`` against every human measure of the tables already written to ``out_dir``, on the
     conditions both share, with condition and participant bootstrap CIs (``data``: the judgements
-    after exclusions). ``codes``: a blind analysis's name -> code map (score conditions outside the
-    study are then left out without being named)."""
+    after exclusions; ``elo_prior``: the analysis's, for the Elo of the participant resamples). ``codes``: a blind
+    analysis's name -> code map (score conditions outside the study are then left out without being named)."""
     out_dir = pathlib.Path(out_dir)
     scores = read_scores(scores_path)
     parts, notes = [], []
@@ -177,7 +178,7 @@ def report_section(scores_path, out_dir, data: pd.DataFrame, *, n_boot: int = 10
             notes.append(f"{int((~known).sum())} score row(s) of conditions outside the study left out "
                          "(names hidden: blind analysis)")
         scores = scores[known].assign(condition=scores.loc[known, "condition"].map(codes))
-    resampler = ParticipantResampler(data, mismatch_suffix)
+    resampler = ParticipantResampler(data, mismatch_suffix, elo_prior)
     tables, humans = [], []
     for source in _REPORT_SOURCES:
         path = out_dir / f"{source}.csv"
