@@ -12,82 +12,19 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import json
-import math
 import pathlib
 import re
-
-import yaml
 
 from study_app.errors import StudyDefinitionError
 from study_app.model import MANIFEST_KINDS, MANIFEST_REQUIRED, PLATFORMS, Manifest, Page, Stimulus, Study
 from study_app.pages import get_kind, page_kinds
 from study_app.pages.pairwise import PAIRWISE_ANSWERS
+from study_app.parse import MAX_FILE_BYTES, parse_definition
 from study_app.schema import Checker, describe
 
+MAX_SESSIONS = 5_000   # plans for 5,000 sessions take about a second to build; 100,000 took half a minute
+
 __all__ = ["load_study", "load_manifest", "Study", "Manifest", "Stimulus", "Page", "PAIRWISE_ANSWERS"]
-
-MAX_NESTING = 50        # definitions are a few levels deep; far deeper input is not a definition
-MAX_ALIASES = 50        # YAML aliases per file (a "billion laughs" file has 81; definitions need few)
-
-
-class _BoundedYamlLoader(yaml.SafeLoader):
-    """PyYAML's safe loader that refuses to resolve more than :data:`MAX_ALIASES` aliases."""
-
-    aliases = 0
-
-    def compose_node(self, parent, index):
-        if self.check_event(yaml.AliasEvent):
-            self.aliases += 1
-            if self.aliases > MAX_ALIASES:
-                raise yaml.YAMLError(f"more than {MAX_ALIASES} aliases; a study definition needs few")
-        return super().compose_node(parent, index)
-
-
-def _no_constant(name: str) -> float:
-    raise ValueError(f"{name} is not a number a study definition can use")
-
-
-def _parse(path: pathlib.Path, text: str) -> object:
-    """JSON or YAML, with errors that name the file and line; bounded nesting and aliases; no NaN."""
-    try:
-        if path.suffix.lower() == ".json":
-            data = json.loads(text, parse_constant=_no_constant)
-        else:
-            data = yaml.load(text, Loader=_BoundedYamlLoader)  # a SafeLoader subclass
-    except RecursionError:
-        raise StudyDefinitionError(f"nested too deeply (at most {MAX_NESTING} levels)", path=path) from None
-    except json.JSONDecodeError as exc:
-        raise StudyDefinitionError(f"invalid JSON: {exc.msg}", path=path, line=exc.lineno) from None
-    except ValueError as exc:
-        raise StudyDefinitionError(f"invalid JSON: {exc}", path=path) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise StudyDefinitionError(f"invalid YAML: {getattr(exc, 'problem', None) or exc}", path=path,
-                                   line=mark.line + 1 if mark else None) from None
-    _check_values(path, data)
-    return data
-
-
-def _check_values(path: pathlib.Path, data: object) -> None:
-    """Bounded depth and finite numbers everywhere (YAML's .nan / .inf are numbers to it)."""
-    stack: list[tuple[object, str, int]] = [(data, "", 1)]
-    seen: set[int] = set()   # YAML aliases share objects: visit each once (no "billion laughs" walk)
-    while stack:
-        item, where, depth = stack.pop()
-        if isinstance(item, (dict, list)):
-            if id(item) in seen:
-                continue
-            seen.add(id(item))
-        if depth > MAX_NESTING:
-            raise StudyDefinitionError(f"nested too deeply (at most {MAX_NESTING} levels)", path=path,
-                                       field=where or None)
-        if isinstance(item, float) and not math.isfinite(item):
-            raise StudyDefinitionError(f"expected a finite number, got {item}", path=path, field=where or None)
-        if isinstance(item, dict):
-            stack.extend((v, f"{where}.{k}" if where else str(k), depth + 1) for k, v in item.items())
-        elif isinstance(item, list):
-            stack.extend((v, f"{where}[{i}]", depth + 1) for i, v in enumerate(item))
 
 
 def _read_text(path: pathlib.Path, missing: str, encoding: str) -> tuple[bytes, str]:
@@ -103,6 +40,9 @@ def _read_text(path: pathlib.Path, missing: str, encoding: str) -> tuple[bytes, 
         raise StudyDefinitionError(f"not a usable file name ({exc})", path=repr(name)[:200]) from None
     if not exists:
         raise StudyDefinitionError(missing, path=path)
+    if encoding == "utf-8" and path.stat().st_size > MAX_FILE_BYTES:
+        raise StudyDefinitionError(f"{path.stat().st_size:,} bytes; a study definition is a few kilobytes (limit "
+                                   f"{MAX_FILE_BYTES:,} bytes)", path=path)
     raw = path.read_bytes()
     try:
         return raw, raw.decode(encoding)
@@ -221,7 +161,7 @@ def load_study(path) -> Study:
     """Load and validate a study definition (``.yaml``, ``.yml`` or ``.json``)."""
     path = pathlib.Path(path)
     raw, text = _read_text(path, "study definition not found; expected a YAML or JSON file", "utf-8")
-    data = _parse(path, text)
+    data = parse_definition(path, text)
     chk = Checker(path)
     if not isinstance(data, dict):
         chk.fail("", f"expected a mapping at the top level, got {describe(data)}")
@@ -244,13 +184,13 @@ def load_study(path) -> Study:
         manifest=manifest,
         pages=[],
         platform=platform,
-        sessions=chk.int_range(data, "sessions", "", 1, 100000, default=10),
+        sessions=chk.int_range(data, "sessions", "", 1, MAX_SESSIONS, default=10),
         seed=chk.int_range(data, "seed", "", 0, 2**31 - 1, default=0),
         completion_code=chk.get(data, "completion_code", "", str, default=""),
         failure_code=chk.get(data, "failure_code", "", str, default=""),
         max_failed_attention_checks=chk.int_range(data, "max_failed_attention_checks", "", 1, 1000,
                                                   default=2),
-        reservation_minutes=float(chk.get(data, "reservation_minutes", "", (int, float), default=100)),
+        reservation_minutes=float(chk.get(data, "reservation_minutes", "", (int, float), default=100)),  # <= 1e15
         require_full_playback=chk.get(data, "require_full_playback", "", bool, default=True),
         min_width=chk.int_range(data, "min_width", "", 0, 10000, default=1100),
         block_mobile=chk.get(data, "block_mobile", "", bool, default=True),
@@ -266,8 +206,12 @@ def load_study(path) -> Study:
     )
     if not 0 <= study.playback_min_fraction <= 1:
         chk.fail("playback_min_fraction", f"expected a number from 0 to 1, got {study.playback_min_fraction}")
-    if study.reservation_minutes <= 0:
-        chk.fail("reservation_minutes", f"expected a positive number, got {study.reservation_minutes}")
+    if not 0 < study.reservation_minutes <= 525_600:
+        chk.fail("reservation_minutes", f"expected a positive number of minutes up to 525600 (a year), got "
+                 f"{study.reservation_minutes:g}")
+    if study.completion_code and study.completion_code == study.failure_code:
+        chk.fail("failure_code", f"the same as completion_code ({study.completion_code!r}); expected a different code, "
+                 "or a participant who fails would be paid as one who completed")
     for key in ("completion_code", "failure_code"):
         code = getattr(study, key)
         if code and not re.match(r"^[A-Za-z0-9_-]{1,64}$", code):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import NoReturn
 
+from evalsuite.errors import did_you_mean
 from study_app.errors import StudyDefinitionError
 from study_app.model import ID_RE
 
@@ -61,6 +62,11 @@ class Checker:
                 self.fail(f"{fp}[{i}]", f"expected a non-empty string, got {describe(v)}")
         if len(value) < min_len:
             self.fail(fp, f"expected at least {min_len} entries, got {len(value)}")
+        first: dict[str, int] = {}
+        for i, v in enumerate(value):
+            j = first.setdefault(v.strip(), i)
+            if j != i:
+                self.fail(fp, f"expected distinct {key} ({v[:60]!r} is entry {j} and entry {i})")
         return value
 
     def unknown_keys(self, obj: dict, allowed, where: str):
@@ -70,7 +76,7 @@ class Checker:
         extra = sorted(set(obj) - set(allowed))
         if extra:
             self.fail(f"{where}.{extra[0]}" if where else extra[0],
-                      f"unknown field; expected one of {', '.join(sorted(allowed))}")
+                      f"unknown field{did_you_mean(extra[0], allowed) or '; see docs/study_app.md for the fields'}")
 
 
 def _as_tuple(types):

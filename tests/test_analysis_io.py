@@ -198,3 +198,58 @@ def test_playback_implausible_column_is_optional_and_checked(tmp_path):
     e = err(tmp_path, lines, header=header)
     assert (e.line, e.field) == (4, "playback_implausible")
     assert "'yes'" in str(e)
+
+
+def test_an_unterminated_quote_names_the_line_where_it_starts(tmp_path):
+    # pandas' parser would raise "EOF inside string"; the reader says where the open quote is.
+    lines = GOOD[:3] + [replace(GOOD[3], "question", '"hl_rating')] + GOOD[4:]
+    e = err(tmp_path, lines)
+    assert e.line == 5, str(e)
+    assert "never closed" in str(e)
+
+
+@pytest.mark.parametrize("quoted", [False, True], ids=["plain", "quoted-multiline"])
+def test_a_field_over_the_csv_module_limit_is_refused_with_its_line(tmp_path, quoted):
+    from evalsuite.analysis.csvtext import MAX_FIELD_CHARS
+
+    giant = "x" * (MAX_FIELD_CHARS + 1)
+    lines = list(GOOD)
+    lines[2] = replace(GOOD[2], "strength", f'"{giant}"' if quoted else giant)
+    if quoted:  # a quoted line break sends the file to the csv module's path
+        lines[0] = replace(GOOD[0], "answered_at", '"2026-01-01T10:00:05Z\n"')
+    e = err(tmp_path, lines)
+    assert e.line == (5 if quoted else 4), str(e)
+    assert f"{MAX_FIELD_CHARS:,}" in str(e)
+
+
+def test_many_repeated_rows_are_counted_and_their_record_copies_for_free(tmp_path):
+    import copy
+    import time
+
+    df = read_results(write(tmp_path, GOOD + [GOOD[0]] * 20_000))
+    rows = df.attrs["rows_excluded"]
+    assert len(rows) == 20_000
+    assert {r[1] for r in rows} == {"duplicate_row"}
+    # pandas deep-copies attrs on every operation: a plain tuple of 20,000 rows made the analysis hang.
+    t0 = time.perf_counter()
+    for _ in range(100):
+        assert copy.deepcopy(rows) is rows
+    frozen = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    copy.deepcopy(tuple(rows))
+    assert frozen < time.perf_counter() - t0
+
+
+def test_more_conditions_or_questions_than_the_limit_are_refused(tmp_path):
+    from evalsuite.analysis.validate import MAX_CONDITIONS, MAX_QUESTIONS
+
+    many = [replace(replace(GOOD[0], "condition_a", f"C{i}"), "page", f"p{i}") for i in range(MAX_CONDITIONS + 1)]
+    e = err(tmp_path, many)
+    assert (e.field, e.line) == ("condition_a", MAX_CONDITIONS + 2), str(e)
+    assert f"more than {MAX_CONDITIONS} distinct conditions" in str(e)
+    many = [replace(replace(GOOD[0], "question", f"q{i}"), "page", f"p{i}") for i in range(MAX_QUESTIONS + 1)]
+    e = err(tmp_path, many)
+    assert (e.field, e.line) == ("question", MAX_QUESTIONS + 2), str(e)
+    battles = "participant,item,condition_a,condition_b,winner"
+    with pytest.raises(InputError, match=f"more than {MAX_CONDITIONS} distinct conditions"):
+        read_battles(write(tmp_path, [f"P1,i{i},C{i},D{i},a" for i in range(60)], header=battles))

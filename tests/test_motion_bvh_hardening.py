@@ -151,3 +151,32 @@ def test_mutated_files_raise_only_bvh_errors(edits):
     assert np.isfinite(values).all()
     assert frame_time > 0
     assert values.shape == (values.shape[0], skeleton.n_channels)
+
+
+@pytest.mark.parametrize("good, bad, line, expected", [
+    ("OFFSET 0 10 0", "OFFSTE 0 10 0", 8, "'OFFSET'"),
+    ("CHANNELS 3 Z", "CHANNLES 3 Z", 9, "'CHANNELS'"),
+    ("JOINT Spine", "JOIN Spine", 6, "'JOINT'"),
+    ("End Site", "EndSite", 10, "'End Site'"),
+    ("End Site", "End Sit", 10, "expected 'Site', found 'Sit'"),
+    ("ROOT Hips", "ROOTT Hips", 2, "'ROOT'"),
+    ("MOTION", "MOTOIN", 16, "'MOTION'"),
+])
+def test_a_misspelt_keyword_is_refused_with_its_line_and_the_keyword_meant(good, bad, line, expected):
+    with pytest.raises(BVHError) as info:
+        parse_bvh(GOOD.replace(good, bad), "typo.bvh")
+    assert info.value.line == line, str(info.value)
+    assert expected in str(info.value)
+
+
+def test_blank_lines_before_motion_are_read_and_other_tokens_refused():
+    _, values, _ = parse_bvh(GOOD.replace("}\nMOTION", "}\n\n  \t\nMOTION"), "blank.bvh")
+    assert values.shape == (2, 9)
+    with pytest.raises(BVHError, match=r"trail.bvh:16: expected MOTION or another ROOT after the hierarchy, found '}'"):
+        parse_bvh(GOOD.replace("}\nMOTION", "}\n}\nMOTION"), "trail.bvh")
+
+
+def test_a_file_without_frames_is_refused():
+    text = GOOD.replace("Frames: 2", "Frames: 0").replace("0 1 2 3 4 5 6 7 8\n1 2 3 4 5 6 7 8 9\n", "")
+    with pytest.raises(BVHError, match=r"none.bvh:17: Frames: expected at least 1 frame"):
+        parse_bvh(text, "none.bvh")

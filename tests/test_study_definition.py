@@ -74,9 +74,9 @@ CASES = [
     ("unknown top key", _set(["colour"], "red"), "colour", "unknown field"),
     ("missing stimuli", _del(["stimuli"]), "stimuli", "missing"),
     ("bad platform", _set(["platform"], "facebook"), "platform", "expected one of prolific, mturk, anonymous"),
-    ("sessions not int", _set(["sessions"], "ten"), "sessions", "expected an integer in 1..100000"),
+    ("sessions not int", _set(["sessions"], "ten"), "sessions", "expected an integer in 1..5000"),
     ("sessions bool", _set(["sessions"], True), "sessions", "expected an integer"),
-    ("sessions zero", _set(["sessions"], 0), "sessions", "expected an integer in 1..100000"),
+    ("sessions zero", _set(["sessions"], 0), "sessions", "expected an integer in 1..5000"),
     ("prolific without code", _del(["completion_code"]), "completion_code", "missing; expected the completion code"),
     ("bad code", _set(["completion_code"], "a b"), "completion_code", "expected letters"),
     ("max failed", _set(["max_failed_attention_checks"], 0), "max_failed_attention_checks", "1..1000"),
@@ -353,3 +353,66 @@ def test_serve_and_gunicorn_factory_have_no_default_credentials(folder, monkeypa
     monkeypatch.delenv("EVALSUITE_SECRET_KEY", raising=False)
     with pytest.raises(StudyStateError, match="EVALSUITE_SECRET_KEY"):
         create_app_from_env()
+
+
+def test_a_key_given_twice_is_refused_with_both_lines(folder):
+    text = (folder / "study.yaml").read_text()
+    path = folder / "twice.yaml"
+    path.write_text(text.replace("sessions: 6\n", "sessions: 6\nseed: 1\nsessions: 7\n"))
+    with pytest.raises(StudyDefinitionError, match=r"twice.yaml:\d+: key 'sessions' given twice \(lines 5 and 7\)"):
+        load_study(path)
+    path.write_text(text.replace("    id: ratings\n", "    id: ratings\n    muted: false\n"))  # nested: muted later
+    with pytest.raises(StudyDefinitionError, match="key 'muted' given twice"):
+        load_study(path)
+    path.write_text(text.replace("  - {id: age,", "  - {id: age, id: age2,"))  # flow style, one line
+    with pytest.raises(StudyDefinitionError, match="key 'id' given twice"):
+        load_study(path)
+    data = json.dumps(yaml.safe_load(text))
+    json_path = folder / "twice.json"
+    json_path.write_text(data.replace('"sessions": 6', '"sessions": 6, "sessions": 7'))
+    with pytest.raises(StudyDefinitionError, match="key 'sessions' given twice"):
+        load_study(json_path)
+
+
+@pytest.mark.parametrize("desc,mutate,field,fragment", [
+    ("huge integer", _set(["reservation_minutes"], 10 ** 300), "reservation_minutes", "a number of 301 digits"),
+    ("reservation over a year", _set(["reservation_minutes"], 1e12), "reservation_minutes", "up to 525600"),
+    ("sessions over the limit", _set(["sessions"], 100_000), "sessions", "expected an integer in 1..5000"),
+    ("very long list", _set(["pages", 1, "questions", 1, "options"], [f"o{i}" for i in range(1001)]),
+     "pages[1].questions[1].options", "a list of 1,001 entries; expected at most 1,000"),
+    ("very long text", _set(["pages", 0, "text"], "x" * 20_001), "pages[0].text", "expected at most 20,000"),
+    ("same completion and failure code", _set(["failure_code"], "DONE1234"), "failure_code", "completion_code"),
+    ("duplicate option", _set(["pages", 1, "questions", 1, "options"], ["a", "b", "a"]),
+     "pages[1].questions[1].options", "expected distinct options ('a' is entry 0 and entry 2)"),
+    ("duplicate segment", _pages(lambda p: p[:4] + [{**p[4], "segments": ["seg01", "seg01"]}] + p[5:]),
+     "pages[4].segments", "expected distinct segments"),
+])
+def test_limits_and_other_invalid_definitions_are_refused_promptly(folder, base, desc, mutate, field, fragment):
+    import time
+
+    data = copy.deepcopy(base)
+    mutate(data)
+    t0 = time.perf_counter()
+    with pytest.raises(StudyDefinitionError) as info:
+        _load(folder, data)
+    assert time.perf_counter() - t0 < 1.0
+    assert info.value.field == field, str(info.value)
+    assert fragment in str(info.value), str(info.value)
+
+
+def test_a_file_over_the_size_limit_is_refused_before_it_is_parsed(folder):
+    from study_app.parse import MAX_FILE_BYTES
+
+    path = folder / "huge.yaml"
+    path.write_text((folder / "study.yaml").read_text() + "#" * MAX_FILE_BYTES)
+    with pytest.raises(StudyDefinitionError, match=f"limit {MAX_FILE_BYTES:,} bytes"):
+        load_study(path)
+
+
+def test_an_unknown_field_suggests_the_closest_names_in_a_short_message(folder, base):
+    data = copy.deepcopy(base)
+    data["sesions"] = 3
+    with pytest.raises(StudyDefinitionError) as info:
+        _load(folder, data)
+    assert "unknown field. Did you mean 'sessions'?" in str(info.value)
+    assert len(info.value.reason) < 120

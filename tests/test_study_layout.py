@@ -67,7 +67,7 @@ def test_mushra_layout_options_defaults_and_values(layout_dir):
 def test_mushra_layout_options_are_validated(layout_dir, tmp_path, line, field, words):
     text = LAYOUT_YAML.replace("    layout: hemvip", line)
     if "slider_numbers" in line:
-        text = text.replace("    layout: hemvip\n", "").replace(
+        text = LAYOUT_YAML.replace("    layout: hemvip\n", "").replace(
             "    question: {id: hlhv", line + "\n    question: {id: hlhv").replace(
             "    slider_numbers: false\n    pages: 1\n    muted: true\n  - type: likert",
             "    pages: 1\n    muted: true\n  - type: likert")

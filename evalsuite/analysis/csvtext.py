@@ -3,8 +3,9 @@
 Every cell is kept as a string (``object`` columns: without pyarrow, pandas' own string dtype
 compares and groups element by element in Python, many times slower) with surrounding white space removed (the validation decides what
 each column must hold; "NA", a common condition name, stays a string). Blank lines are skipped;
-a record with another number of fields than the header, a file that is not UTF-8, or one with a
-control character is an :class:`~evalsuite.errors.InputError` naming the line.
+a record with another number of fields than the header, a file that is not UTF-8, one with a
+control character, an unterminated quote or a field longer than :data:`MAX_FIELD_CHARS` (the ``csv``
+module's limit) is an :class:`~evalsuite.errors.InputError` naming the line.
 
 Two paths with the same result: pandas' C parser (a million rows in seconds), with the line of
 each record taken from the non-blank lines; when a quoted field spans lines (so records and lines
@@ -23,6 +24,8 @@ import pandas as pd
 
 from evalsuite.analysis import validate
 from evalsuite.errors import InputError
+
+MAX_FIELD_CHARS = 131_072   # the csv module's field_size_limit(); both reading paths refuse longer fields
 
 
 def _fail(message, path, line=None) -> NoReturn:
@@ -94,6 +97,7 @@ def _fast(raw: bytes, text: str, path):
     else:
         commas = np.flatnonzero(b == 44)
     del quote
+    _check_field_lengths(commas, nl, path)
     # commas before the end of each line, differenced: the commas of each line
     fields = np.diff(np.searchsorted(commas, nl), prepend=0) + 1
     starts = np.r_[0, nl[:-1] + 1]
@@ -107,31 +111,56 @@ def _fast(raw: bytes, text: str, path):
     lines = data + 1
     if len(data) == 0:
         return header, pd.DataFrame(columns=header, dtype=object), lines
-    df = pd.read_csv(io.BytesIO(raw), header=None, skiprows=1, names=range(len(header)), dtype=object,
-                     keep_default_na=False, na_filter=False, engine="c", skip_blank_lines=True,
-                     encoding="utf-8")
+    try:
+        df = pd.read_csv(io.BytesIO(raw), header=None, skiprows=1, names=range(len(header)), dtype=object,
+                         keep_default_na=False, na_filter=False, engine="c", skip_blank_lines=True,
+                         encoding="utf-8")
+    except pd.errors.ParserError:
+        return None                                   # e.g. a quote never closed: the csv module says where
     if len(df) != len(data):
         return None
     df.columns = header
     return header, df, lines
 
 
+def _check_field_lengths(commas: np.ndarray, nl: np.ndarray, path) -> None:
+    """Refuse a field longer than :data:`MAX_FIELD_CHARS` bytes (the gap between two separators), naming its line.
+
+    Only lines longer than the limit can hold such a field, so only those are looked at."""
+    starts = np.r_[0, nl[:-1] + 1]
+    for i in np.flatnonzero(nl - starts > MAX_FIELD_CHARS):
+        inner = commas[np.searchsorted(commas, starts[i]):np.searchsorted(commas, nl[i])]
+        longest = int(np.diff(np.r_[starts[i] - 1, inner, nl[i]]).max()) - 1
+        if longest > MAX_FIELD_CHARS:
+            _fail(f"a field of {longest:,} bytes; expected at most {MAX_FIELD_CHARS:,} characters per field (the csv "
+                  "module's limit)", path, line=int(i) + 1)
+
+
 def _quoted(text: str, path):
     records, lines = [], []
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    ended = 0                                         # the line where the last whole record ended
     try:
-        reader = csv.reader(io.StringIO(text, newline=""), strict=True)
         header = next(reader, None)
         if not header:
             _fail("empty file: expected a header row and at least one data row", path)
         header = [c.strip() for c in header]
+        ended = reader.line_num
         for row in reader:
             if not row or (len(row) == 1 and not row[0].strip()):
+                ended = reader.line_num
                 continue  # blank line
             if len(row) != len(header):
                 _width_error(len(row), header, path, reader.line_num)
             records.append(row)
             # reader.line_num is the file line where this record ended (quoted newlines ok).
             lines.append(reader.line_num)
+            ended = reader.line_num
     except csv.Error as exc:
-        _fail(f"not a well-formed CSV: {exc}", path)
+        reason, line = str(exc), reader.line_num or None
+        if "field larger than field limit" in reason:
+            reason = f"a field longer than {MAX_FIELD_CHARS:,} characters (the csv module's limit)"
+        elif "unexpected end of data" in reason:
+            reason, line = "a quoted field starting on this line is never closed (an unterminated '\"')", ended + 1
+        _fail(f"not a well-formed CSV: {reason}", path, line=line)
     return header, pd.DataFrame(records, columns=header, dtype=object), lines

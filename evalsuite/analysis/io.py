@@ -200,6 +200,7 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
         _fail(f"statement {q!r} is in scale {rows['scale'].iloc[0]!r} on earlier rows but in "
               f"{other['scale']!r} here", path, line=int(other["line"]), field="scale")
 
+    validate.check_sizes(df, path)
     df = df.copy()
     df["value"] = value.where(mu | lk)
     df, excluded = validate.duplicate_rows(df, path)
@@ -208,8 +209,9 @@ def read_results(path, study: str | None = None) -> pd.DataFrame:
     df.attrs["source"] = os.fspath(path)
     df.attrs["format"] = "results"
     df.attrs["study"] = studies[0] if study is None else study
-    # (line, reason, detail) of rows excluded by the reader (plain tuples: attrs are copied along)
-    df.attrs["rows_excluded"] = tuple(excluded.itertuples(index=False, name=None))
+    # (line, reason, detail) of rows excluded by the reader; pandas deep-copies attrs on every operation, so
+    # they are held in a tuple that is its own deep copy (20,000 repeated rows made the analysis hang).
+    df.attrs["rows_excluded"] = validate.Frozen(excluded.itertuples(index=False, name=None))
     return df.reset_index(drop=True)
 
 
@@ -291,6 +293,7 @@ def read_battles(path) -> pd.DataFrame:
         row = out[out["question"] == ""].iloc[0]
         _fail("empty value; the optional question column must be filled when present", path,
               line=int(row["line"]), field="question")
+    validate.check_sizes(out, path)
     out.attrs["source"] = os.fspath(path)
     out.attrs["format"] = "battles"
     out.attrs["study"] = "battles"

@@ -1,6 +1,7 @@
 """``analyze``: read, exclude, test, and write every table, figure and the HTML report."""
 from __future__ import annotations
 
+import hashlib
 import html
 import json
 import pathlib
@@ -159,11 +160,10 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
 
     sections = _figures_and_sections(res, opt, data, out_dir, raw, path)
     if opt.scores:
-        from evalsuite.analysis.correlate.output import report_section
+        from evalsuite.analysis.correlate_out import report_section
         codes = blinding.blind_codes(names, salt, opt.mismatch_suffix) if salt is not None else None
         sections.append(report_section(opt.scores, out_dir, data, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha,
-                                       figures=opt.figures, mismatch_suffix=opt.mismatch_suffix,
-                                       elo_prior=opt.elo_prior, codes=codes, echo=echo))
+                                       figures=opt.figures, mismatch_suffix=opt.mismatch_suffix, codes=codes, echo=echo))
     title = f"evalsuite analysis: {raw.attrs.get('study', '')}"
     res.report_path = out_dir / "report.html"
     res.report_path.write_text(report.html_report(title, sections), encoding="utf-8")
@@ -287,5 +287,10 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
     return sections
 
 
-def _safe(name: str) -> str:
-    return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(name))
+def _safe(name: str, limit: int = 120) -> str:
+    """A file-name part for ``name``: letters, digits, '-' and '_'; one of more than ``limit`` bytes in UTF-8
+    (file names end at 255 bytes) is cut to 24 characters and 8 hex digits of its hash (names stay distinct)."""
+    safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(name))
+    if len(safe.encode()) <= limit:
+        return safe
+    return f"{safe[:24]}_{hashlib.sha256(str(name).encode()).hexdigest()[:8]}"

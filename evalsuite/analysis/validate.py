@@ -17,6 +17,10 @@ of it can be trusted:
 - two rows for the same judgement (same session, page, question, condition or pair, MUSHRA
   slot) with different answers: which one the participant gave cannot be known.
 
+- more than :data:`MAX_CONDITIONS` distinct conditions or :data:`MAX_QUESTIONS` distinct questions (real
+  studies have a few dozen at most; the tests run on every pair of conditions, so far more would take
+  hours), refused before any statistic with the row where the limit is passed;
+
 Excluded and counted (the report says how many, ``rows_excluded.csv`` lists them): exact
 repeats of a judgement row (same judgement, same answer), as when an export is appended twice.
 """
@@ -33,10 +37,20 @@ from evalsuite.errors import InputError
 CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 MAX_RT_MS = 10_000_000_000
 MAX_LIKERT_POINTS = 11
+MAX_CONDITIONS = 100
+MAX_QUESTIONS = 200
 DIGITS = r"[0-9]+"
 DECIMAL = r"[0-9]+(?:\.[0-9]+)?"
 JUDGEMENT_KEY = ["session", "page", "question", "condition", "pair", "position_a"]
 EXCLUDED_COLUMNS = ["line", "reason", "detail"]
+
+
+class Frozen(tuple):
+    """A tuple of immutable rows that ``copy.deepcopy`` returns as it is: pandas deep-copies a DataFrame's
+    ``attrs`` on every operation, which for thousands of rows costs more than the analysis."""
+
+    def __deepcopy__(self, memo) -> Frozen:
+        return self
 
 
 def _fail(message, path, line=None, field=None) -> NoReturn:
@@ -164,3 +178,20 @@ def duplicate_rows(df: pd.DataFrame, path) -> tuple[pd.DataFrame, pd.DataFrame]:
                              "detail": [f"repeats line {int(v)} (same session, page, question, condition and "
                                         "answer)" for v in first_line[repeat[dup]].to_numpy()]})
     return df[~repeat], excluded
+
+
+def check_sizes(df: pd.DataFrame, path) -> None:
+    """Refuse more than :data:`MAX_CONDITIONS` distinct conditions or :data:`MAX_QUESTIONS` distinct questions,
+    naming a row that holds one beyond the limit."""
+    names = pd.concat([df["condition"], df["condition_a"], df["condition_b"]], keys=["condition", "condition_a",
+                                                                                   "condition_b"])
+    names = names[names != ""]
+    for values, limit, what in ((names, MAX_CONDITIONS, "conditions"), (df["question"], MAX_QUESTIONS, "questions")):
+        uniq = pd.unique(values)
+        if len(uniq) <= limit:
+            continue
+        over = values[values == uniq[limit]]
+        col, idx = over.index[0] if isinstance(over.index, pd.MultiIndex) else ("question", over.index[0])
+        _fail(f"more than {limit} distinct {what} ({uniq[limit][:60]!r} here is one of {len(uniq)}); expected at most "
+              f"{limit} in one study (far above real studies; the tests run per question and per pair of conditions)",
+              path, line=int(df.at[idx, "line"]), field=col)

@@ -11,6 +11,7 @@ inconsistency does a line-by-line pass run to report exactly where the file is w
 """
 from __future__ import annotations
 
+import difflib
 import math
 import os
 import re
@@ -66,16 +67,16 @@ class _Tokens:
     def expect(self, word: str) -> int:
         tok, line = self.next(repr(word))
         if tok.lower() != word.lower():
-            raise self.error(f"expected {word!r}, found {tok!r}", line)
+            raise self.error(f"expected {word!r}, found {tok[:60]!r}", line)
         return line
 
     def number(self, what: str) -> float:
         tok, line = self.next(what)
         if not NUMBER_RE.match(tok):
-            raise self.error(f"expected a number for {what}, found {tok!r}", line)
+            raise self.error(f"expected a number for {what}, found {tok[:60]!r}", line)
         value = float(tok)
         if not math.isfinite(value):
-            raise self.error(f"expected a finite number for {what}, found {tok!r}", line)
+            raise self.error(f"expected a finite number for {what}, found {tok[:60]!r}", line)
         return value
 
 
@@ -133,7 +134,7 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
                     raise tokens.error(f"joint {name!r} has a second CHANNELS line", line)
                 count_tok, count_line = tokens.next("the channel count")
                 if not COUNT_RE.match(count_tok):
-                    raise tokens.error(f"expected a whole channel count after CHANNELS, found {count_tok!r}",
+                    raise tokens.error(f"expected a whole channel count after CHANNELS, found {count_tok[:60]!r}",
                                        count_line)
                 chans = []
                 for _ in range(int(count_tok)):
@@ -141,7 +142,7 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
                     canon = canonical_channel(ch_tok)
                     if canon is None:
                         raise tokens.error(
-                            f"unknown channel {ch_tok!r} for joint {name!r}; expected one of Xposition, "
+                            f"unknown channel {ch_tok[:60]!r} for joint {name!r}; expected one of Xposition, "
                             "Yposition, Zposition, Xrotation, Yrotation, Zrotation"
                             + (" (fewer channel names than CHANNELS says?)" if ch_tok.upper() in
                                ("JOINT", "END", "OFFSET", "}") else ""), ch_line)
@@ -165,18 +166,30 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
                 return
             else:
                 raise tokens.error(f"expected OFFSET, CHANNELS, JOINT, End Site or '}}' in joint {name!r}, "
-                                   f"found {tok!r}", line)
+                                   f"found {tok[:60]!r}{_did_you_mean(tok, JOINT_KEYWORDS)}", line)
 
     while (peeked := tokens.peek()) is not None and peeked.upper() == "ROOT":
         _, line = tokens.next("ROOT")
         joint(-1, line)
     if not names:
         tok = tokens.peek()
-        raise tokens.error("expected ROOT after HIERARCHY" + (f", found {tok!r}" if tok else ""))
-    if tokens.peek() is not None:
-        raise tokens.error(f"expected MOTION or another ROOT after the hierarchy, found {tokens.peek()!r}")
+        raise tokens.error("expected ROOT after HIERARCHY"
+                           + (f", found {tok[:60]!r}{_did_you_mean(tok, ('ROOT',))}" if tok else ""))
+    if (tok := tokens.peek()) is not None:
+        # Refused, not skipped (some readers skip lines up to MOTION): a misspelt second ROOT would lose a skeleton.
+        raise tokens.error(f"expected MOTION or another ROOT after the hierarchy, found {tok[:60]!r}"
+                           f"{_did_you_mean(tok, ('MOTION', 'ROOT'))}")
     return Skeleton(names, np.asarray(parents, dtype=np.int64), np.asarray(offsets, dtype=np.float64), channels,
                     np.asarray(end_parents, dtype=np.int64), np.asarray(end_offsets, dtype=np.float64).reshape(-1, 3))
+
+
+JOINT_KEYWORDS = ("OFFSET", "CHANNELS", "JOINT", "End Site")
+
+
+def _did_you_mean(token: str, keywords: tuple[str, ...]) -> str:
+    """``" (did you mean 'OFFSET'?)"`` for a misspelt keyword (case ignored), else ``""``."""
+    close = difflib.get_close_matches(token.upper(), [k.upper() for k in keywords], n=1, cutoff=0.6)
+    return f" (did you mean {next(k for k in keywords if k.upper() == close[0])!r}?)" if close else ""
 
 
 def _read_text(path: str, data: bytes) -> str:
@@ -247,6 +260,9 @@ def parse_bvh(data: bytes | str, path: str = "<string>") -> tuple[Skeleton, np.n
         raise BVHError(f"expected a whole number of frames, found {frames_tok!r}", path=path, line=frames_line,
                        field="Frames")
     n_frames = int(frames_tok)
+    if n_frames == 0:
+        raise BVHError("expected at least 1 frame; 'Frames: 0' holds no motion", path=path, line=frames_line,
+                       field="Frames")
     time_tok, time_line = found["time"]
     frame_time = float(time_tok) if NUMBER_RE.match(time_tok) else float("nan")
     if not (math.isfinite(frame_time) and frame_time >= 1.0 / MAX_FPS):

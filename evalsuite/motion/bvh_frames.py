@@ -44,12 +44,12 @@ def frames_slow(lines: list[str], first_line: int, n_frames: int, skeleton: Skel
             if not NUMBER_RE.match(tok):
                 column = line.index(tok, sum(len(f) for f in fields[:col])) + 1
                 what = "a finite number" if tok.lower().lstrip("+-") in ("nan", "inf", "infinity") else "a number"
-                raise BVHError(f"expected {what}, found {tok!r} (column {column}; BVH numbers are plain decimal "
+                raise BVHError(f"expected {what}, found {tok[:60]!r} (column {column}; BVH numbers are plain decimal "
                                "or exponent notation)", path=path, line=number,
                                field=f"frame {frame}, channel '{names[col]}'")
             value = float(tok)
             if not math.isfinite(value):
-                raise BVHError(f"expected a finite number, found {tok!r}", path=path, line=number,
+                raise BVHError(f"expected a finite number, found {tok[:60]!r}", path=path, line=number,
                                field=f"frame {frame}, channel '{names[col]}'")
             out[frame, col] = value
         frame += 1
