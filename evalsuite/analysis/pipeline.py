@@ -160,10 +160,11 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
 
     sections = _figures_and_sections(res, opt, data, out_dir, raw, path)
     if opt.scores:
-        from evalsuite.analysis.correlate_out import report_section
+        from evalsuite.analysis.correlate.output import report_section
         codes = blinding.blind_codes(names, salt, opt.mismatch_suffix) if salt is not None else None
         sections.append(report_section(opt.scores, out_dir, data, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha,
-                                       figures=opt.figures, mismatch_suffix=opt.mismatch_suffix, codes=codes, echo=echo))
+                                       figures=opt.figures, mismatch_suffix=opt.mismatch_suffix,
+                                       elo_prior=opt.elo_prior, codes=codes, echo=echo))
     title = f"evalsuite analysis: {raw.attrs.get('study', '')}"
     res.report_path = out_dir / "report.html"
     res.report_path.write_text(report.html_report(title, sections), encoding="utf-8")
