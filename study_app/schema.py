@@ -40,7 +40,7 @@ class Checker:
                          expected="an id of letters, digits, '_', '-', '.' (at most 64)")
         if value is not None and not ID_RE.match(value):
             self.fail(f"{where}.{key}" if where else key,
-                      f"expected an id of letters, digits, '_', '-', '.' (at most 64), got {value!r}")
+                      f"expected an id of letters, digits, '_', '-', '.' (at most 64), got {value[:60]!r}")
         return value
 
     def int_range(self, obj, key, where, lo, hi, *, required=False, default=None):

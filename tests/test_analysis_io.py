@@ -253,3 +253,9 @@ def test_more_conditions_or_questions_than_the_limit_are_refused(tmp_path):
     battles = "participant,item,condition_a,condition_b,winner"
     with pytest.raises(InputError, match=f"more than {MAX_CONDITIONS} distinct conditions"):
         read_battles(write(tmp_path, [f"P1,i{i},C{i},D{i},a" for i in range(60)], header=battles))
+
+
+def test_a_long_bad_value_is_shown_cut_in_a_short_message(tmp_path):
+    e = err(tmp_path, [replace(GOOD[0], "page_type", "p" * 5000)] + GOOD[1:])
+    assert (e.line, e.field) == (2, "page_type")
+    assert len(e.reason) < 300, e.reason

@@ -416,3 +416,12 @@ def test_an_unknown_field_suggests_the_closest_names_in_a_short_message(folder, 
         _load(folder, data)
     assert "unknown field. Did you mean 'sessions'?" in str(info.value)
     assert len(info.value.reason) < 120
+
+
+def test_a_long_bad_id_is_shown_cut_in_a_short_message(folder, base):
+    data = copy.deepcopy(base)
+    data["id"] = "x" * 5000 + "!"
+    with pytest.raises(StudyDefinitionError) as info:
+        _load(folder, data)
+    assert info.value.field == "id"
+    assert len(info.value.reason) < 300, info.value.reason

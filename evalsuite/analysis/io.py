@@ -75,7 +75,7 @@ def _check_allowed(df, mask, col, allowed, path, what=None):
         row = df[bad].iloc[0]
         shown = ", ".join(repr(a) for a in allowed if a != "") or "(empty)"
         extra = " or empty" if "" in allowed else ""
-        _fail(f"unknown value {row[col]!r}{' for ' + what if what else ''}; expected one of "
+        _fail(f"unknown value {row[col][:60]!r}{' for ' + what if what else ''}; expected one of "
               f"{shown}{extra}", path, line=int(row["line"]), field=col)
 
 

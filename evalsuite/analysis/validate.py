@@ -84,7 +84,7 @@ def check_spelling(df: pd.DataFrame, mask, col: str, pattern: str, path, expecte
     if wrong:
         bad = vals.isin(wrong)
         idx = bad[bad].index[0]
-        _fail(f"invalid value {df.at[idx, col]!r}; expected {expected}", path, line=int(df.at[idx, "line"]),
+        _fail(f"invalid value {df.at[idx, col][:60]!r}; expected {expected}", path, line=int(df.at[idx, "line"]),
               field=col)
 
 
@@ -143,7 +143,7 @@ def normalise_times(df: pd.DataFrame, path) -> None:
         if parsed.isna().any():
             bad = uniq[int(np.flatnonzero(parsed.isna().to_numpy())[0])]
             first = df.index[vals == bad][0]
-            _fail(f"invalid time {bad!r}; expected an ISO 8601 time such as 2026-03-02T09:00:00Z (UTC when "
+            _fail(f"invalid time {bad[:60]!r}; expected an ISO 8601 time such as 2026-03-02T09:00:00Z (UTC when "
                   "no offset is given) or an empty cell", path, line=int(df.at[first, "line"]), field=col)
         stamps = np.datetime_as_string(parsed.dt.tz_localize(None).to_numpy("datetime64[us]"), unit="us")
         canon = dict(zip(uniq, np.char.add(stamps, "Z").tolist()))

@@ -184,7 +184,7 @@ class BlockKind(PageKind):
         segments = chk.str_list(page, "segments", where, default=None, min_len=1)
         for i, s in enumerate(segments or []):
             if s not in all_segments:
-                chk.fail(f"{where}.segments[{i}]", f"unknown segment {s!r}; expected one of the "
+                chk.fail(f"{where}.segments[{i}]", f"unknown segment {s[:60]!r}; expected one of the "
                          f"manifest's segments")
         self.load_options(chk, page, where, cfg, known)
         cfg["segments"] = self._usable_segments(chk, where, cfg, segments or all_segments, bool(segments),
