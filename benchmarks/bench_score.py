@@ -27,7 +27,11 @@ N_JOINTS = 56
 FPS = 30.0
 
 
-def generate(cache: pathlib.Path) -> pathlib.Path:
+def generate(cache: pathlib.Path, *, n_conditions: int = N_CONDITIONS, n_sequences: int = N_SEQUENCES,
+             seconds: float = SECONDS, n_joints: int = N_JOINTS, fps: float = FPS) -> pathlib.Path:
+    """``cache/natural`` and ``cache/cond00 ...`` of ``n_sequences`` synthetic takes each (made once): every third
+    condition other takes, then natural plus noise, then over-smoothed natural. Also used by
+    bench_score_bootstrap.py with other sizes."""
     from evalsuite.motion.filters import smooth
     from evalsuite.motion.io import save_motion
     from evalsuite.motion.synthetic import synthetic_motion
@@ -37,13 +41,13 @@ def generate(cache: pathlib.Path) -> pathlib.Path:
         return cache
     t0 = time.perf_counter()
     rng = np.random.default_rng(0)
-    for s in range(N_SEQUENCES):
-        natural = synthetic_motion(N_JOINTS, FPS, SECONDS, seed=s)
+    for s in range(n_sequences):
+        natural = synthetic_motion(n_joints, fps, seconds, seed=s)
         takes = {"natural": natural}
-        for c in range(N_CONDITIONS):
+        for c in range(n_conditions):
             kind = c % 3
             if kind == 0:      # another take: right style, wrong moment
-                takes[f"cond{c:02d}"] = synthetic_motion(N_JOINTS, FPS, SECONDS, seed=1000 * (c + 1) + s)
+                takes[f"cond{c:02d}"] = synthetic_motion(n_joints, fps, seconds, seed=1000 * (c + 1) + s)
             elif kind == 1:    # natural plus noise
                 noisy = natural.values + rng.normal(0, 1.0 + c / 5, natural.values.shape)
                 takes[f"cond{c:02d}"] = natural.with_values(noisy)
@@ -54,7 +58,7 @@ def generate(cache: pathlib.Path) -> pathlib.Path:
             folder.mkdir(parents=True, exist_ok=True)
             save_motion(motion, folder / f"take{s:03d}.bvh", precision=4)
     done.write_text("ok\n")
-    print(f"generated {(N_CONDITIONS + 1) * N_SEQUENCES} BVH files in {time.perf_counter() - t0:.1f} s -> {cache}")
+    print(f"generated {(n_conditions + 1) * n_sequences} BVH files in {time.perf_counter() - t0:.1f} s -> {cache}")
     return cache
 
 
