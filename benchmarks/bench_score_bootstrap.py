@@ -79,7 +79,7 @@ def former_per_resample(cache: pathlib.Path, n: int = 8) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cache", type=pathlib.Path,
-                        default=pathlib.Path(tempfile.gettempdir()) / "evalsuite-bench-bootstrap-2")
+                        default=pathlib.Path(tempfile.gettempdir()) / "evalsuite-bench-bootstrap")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--bootstrap", type=int, default=1000)
     args = parser.parse_args()
