@@ -7,7 +7,7 @@ import pytest
 
 from evalsuite.corpus.types import Transcript, Word
 from evalsuite.features import Recipe, extract, register_recipe
-from evalsuite.features.base import _REGISTRY
+from evalsuite.features.base import RECIPES
 from evalsuite.features.cache import default_cache_dir
 
 
@@ -22,7 +22,7 @@ def counting():
     register_recipe(Recipe(name="_test_counting", native_fps=10.0, dim=2, reproduces="test", quirks="none",
                            compute=compute, params={"scale": 1.0}))
     yield calls
-    _REGISTRY.pop("_test_counting", None)
+    RECIPES.pop("_test_counting", None)
 
 
 def audio(seed=0):
