@@ -84,7 +84,7 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
     """
     from evalsuite.metrics.engine import ScoreOptions, score_folders
     from evalsuite.metrics.figures import write_figures
-    from evalsuite.metrics.report import format_table, summary_frame, write_outputs
+    from evalsuite.metrics.report import format_table, grouped_issues, summary_frame, write_outputs
 
     group_list = [g.replace(";", ",") for g in groups.split(",") if g.strip()] if groups else []
     extra = [_fgd_family(fgd_model, fgd_raw)] if fgd_model is not None else []
@@ -96,7 +96,7 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
     result = score_folders(reference, conditions, options)
     paths = write_outputs(result, out_dir)
     figures = [] if no_figures else write_figures(result, out_dir / "figures")
-    for issue in result.issues:
+    for issue in grouped_issues(result.issues, result.plan.conditions):
         click.secho(f"warning: {issue}", fg="yellow", err=True)
     for line in _resampling_lines(result.resampled):
         click.secho(f"warning: {line}", fg="yellow", err=True)

@@ -18,3 +18,12 @@ def test_a_misspelt_metric_or_family_gets_the_closest_names_in_one_short_line():
 def test_did_you_mean_says_nothing_when_nothing_is_close():
     assert did_you_mean("zzz", ["jerk", "ape"]) == ""
     assert did_you_mean("ap", ["jerk", "ape"]) == ". Did you mean 'ape'?"
+
+
+def test_issues_shared_by_conditions_are_printed_once_with_their_conditions():
+    from evalsuite.metrics.report import grouped_issues
+
+    issues = ["a: fd_g: 2 sequence(s) on a side", "a_b: fd_g: 2 sequence(s) on a side", "a: cca: not computed",
+              "no audio for 3 sequences"]
+    assert grouped_issues(issues, ["a", "a_b"]) == [
+        "fd_g: 2 sequence(s) on a side (conditions a, a_b)", "a: cca: not computed", "no audio for 3 sequences"]

@@ -47,12 +47,13 @@ def _warn_small(rows: list[dict], reference: dict, conditions: dict) -> None:
     """Warn (stderr) where the FGD's samples are too small (the rule of `evalsuite score`)."""
     from evalsuite.learned.network import LATENT_DIM
     from evalsuite.metrics.frechet import sample_size_warnings
+    from evalsuite.metrics.report import grouped_issues
 
-    for r in rows:
-        if r["metric"] == "fgd":
-            for line in sample_size_warnings((r["n_windows_reference"], r["n_windows_condition"]), LATENT_DIM,
-                                             (len(reference), len(conditions[r["condition"]])), "windows"):
-                click.secho(f"warning: {r['condition']}: fgd: {line}", fg="yellow", err=True)
+    issues = [f"{r['condition']}: fgd: {line}" for r in rows if r["metric"] == "fgd"
+              for line in sample_size_warnings((r["n_windows_reference"], r["n_windows_condition"]), LATENT_DIM,
+                                               (len(reference), len(conditions[r["condition"]])), "windows")]
+    for line in grouped_issues(issues, conditions):
+        click.secho(f"warning: {line}", fg="yellow", err=True)
 
 
 def _warn_resampled(model_fps: float, label_sets: dict, why: str = "to the model's frame rate") -> list[dict]:

@@ -18,12 +18,35 @@ import pandas as pd
 from evalsuite.contracts import summary as summary_contract
 from evalsuite.metrics.engine import ScoreResult
 
-__all__ = ["SUMMARY_COLUMNS", "summary_frame", "format_table", "markdown_table", "latex_table", "write_outputs"]
+__all__ = ["SUMMARY_COLUMNS", "summary_frame", "format_table", "markdown_table", "latex_table", "write_outputs",
+           "grouped_issues"]
 
 SUMMARY_COLUMNS = list(summary_contract.COLUMNS)
 _ARROW = {"lower": "lower is better", "higher": "higher is better", "closer to natural": "closer to natural"}
 _SYMBOL = {"lower": "↓", "higher": "↑", "closer to natural": "≈nat"}
 _TEX_SYMBOL = {"lower": r"$\downarrow$", "higher": r"$\uparrow$", "closer to natural": r"$\approx$nat"}
+
+
+def grouped_issues(issues: Iterable[str], conditions: Iterable[str]) -> list[str]:
+    """The run's issues for the terminal, one line per distinct message: ``"<condition>: <message>"`` lines that
+    differ only in their condition become ``"<message> (conditions a, b, c)"`` (``results.json`` keeps every one)."""
+    names = sorted(conditions, key=len, reverse=True)       # the longest name first: "a_b" before "a"
+    groups: dict[str, list[str]] = {}
+    for issue in issues:
+        cond = next((c for c in names if issue.startswith(f"{c}: ")), None)
+        key = issue[len(cond) + 2:] if cond is not None else issue
+        groups.setdefault(key, [])
+        if cond is not None:
+            groups[key].append(cond)
+    out = []
+    for message, conds in groups.items():
+        if len(conds) == 1:
+            out.append(f"{conds[0]}: {message}")
+        elif conds:
+            out.append(f"{message} (conditions {', '.join(conds)})")
+        else:
+            out.append(message)
+    return out
 
 
 def summary_frame(rows: Iterable[dict[str, Any]]) -> pd.DataFrame:
