@@ -170,6 +170,11 @@ def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict[str, Any]:
         return {"path": str(path), "error": str(exc)}
 
 
+def copy_task_result(result: dict[str, Any]) -> dict[str, Any]:
+    """A task result with each record copied (a family's ``fold`` may pop what it has used from a record)."""
+    return {"name": result["name"], "records": {c: dict(r) for c, r in result["records"].items()}}
+
+
 class _Folder:
     """Folds each result's bulky summaries into per-condition sums, in task order (see module docstring).
     With ``kept``, the results as they came are appended to it and a copy of each is folded instead (a
@@ -182,7 +187,7 @@ class _Folder:
     def __call__(self, index: int, result: dict[str, Any]) -> dict[str, Any]:
         if self.kept is not None:
             self.kept.append(result)
-            result = {"name": result["name"], "records": {c: dict(r) for c, r in result["records"].items()}}
+            result = copy_task_result(result)
         records = result["records"]
         nat = records.get(self.reference, {})
         for cond, rec in records.items():

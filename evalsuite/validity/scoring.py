@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from evalsuite.errors import InputError
-from evalsuite.metrics.engine import ScoreOptions, ScoreResult, plan_for, reduce_results, score_plan
+from evalsuite.metrics.engine import ScoreOptions, ScoreResult, copy_task_result, plan_for, reduce_results, score_plan
 from evalsuite.metrics.families import (
     MetricFamily,
     ReduceContext,
@@ -58,11 +58,6 @@ def score_conditions(folders: dict[str, pathlib.Path], corpus_root: pathlib.Path
     return Scored(result, result.task_results)
 
 
-def _copies(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Task results with each record copied (a family's ``fold`` may pop what it has used from a record)."""
-    return [{"name": r["name"], "records": {c: dict(rec) for c, rec in r["records"].items()}} for r in results]
-
-
 def _resampled(results: list[dict[str, Any]], draw: np.ndarray) -> list[dict[str, Any]]:
     """The drawn task results (renamed copies), each at a position of its original parity (gaps: empty tasks)."""
     parts = [sorted(int(i) for i in draw if i % 2 == p) for p in (0, 1)]
@@ -75,8 +70,7 @@ def _resampled(results: list[dict[str, Any]], draw: np.ndarray) -> list[dict[str
                 continue
             i = parts[p][k]
             copies[i] = copies.get(i, 0) + 1
-            out.append({"name": f"{results[i]['name']}~{copies[i]}",
-                        "records": {c: dict(rec) for c, rec in results[i]["records"].items()}})
+            out.append({**copy_task_result(results[i]), "name": f"{results[i]['name']}~{copies[i]}"})
     return out
 
 
@@ -112,7 +106,7 @@ def _reduce_weighted(scored: Scored, weights: np.ndarray) -> list[dict[str, Any]
     info = {name: mi for name, (_, mi) in metric_index({f.name: f for f in setup.family_objects}).items()}
     records: dict[str, dict[str, dict[str, Any]]] = {c: {} for c in plan.conditions}
     acc: dict[str, dict[str, Any]] = {}
-    for i, task in enumerate(_copies(scored.results)):
+    for i, task in enumerate(map(copy_task_result, scored.results)):
         nat = task["records"].get(plan.reference, {})
         for cond, rec in task["records"].items():
             if "error" in rec:
