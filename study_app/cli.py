@@ -42,7 +42,7 @@ def study():
 def build(study_file, out, db):
     """Validate STUDY_FILE and write its balanced session plans."""
     from study_app.definition import load_study
-    from study_app.design import balance_report, build_plans, default_plans_path, write_plans
+    from study_app.design import balance_report, build_plans, default_plans_path, position_spread, write_plans
 
     st = load_study(study_file)
     plans = build_plans(st)
@@ -61,6 +61,12 @@ def build(study_file, out, db):
             per_cond[(block, cond)] = per_cond.get((block, cond), 0) + n
         click.echo("mushra ratings per condition: " + ", ".join(
             f"{b}/{c}: {n}" for (b, c), n in sorted(per_cond.items())))
+    spreads = [(what, block, d) for what, key in (("page positions", "page_positions"), ("mushra slots", "mushra_slots"),
+                                                 ("pairwise sides", "pairs"))
+               for block, d in sorted(position_spread(report[key]).items())]
+    if spreads:
+        click.echo("orders, largest distance of a count from equal (0: exact, up to 1: equal within one): "
+                   + ", ".join(f"{what} {block} {d:.2g}" for what, block, d in spreads))
     if db:
         from study_app.storage import init_db, make_engine
         init_db(make_engine(db), st, plans)

@@ -5,14 +5,16 @@
 
 * block pages get a global index ``g = session * pages + j``; pairwise page ``g`` shows pair
   ``pairs[g % len(pairs)]`` (so over ``n * pages`` pages every comparison occurs
-  ``n * pages / len(pairs)`` times when that divides), condition A goes left on even and
-  right on odd occurrences of its pair (left/right counterbalanced);
+  ``n * pages / len(pairs)`` times when that divides);
 * segments cycle with ``g`` (distinct within a session while ``pages <= len(segments)``), and
   shift by one every ``lcm(len(items), len(segments))`` pages so that every item meets every
   segment;
-* the order of a session's block pages is a row of a Williams balanced Latin square (each
-  page in each position equally often, first-order carry-over balanced);
-* MUSHRA pages rotate the slot order (each condition in each slot equally often);
+* orders are random per page and participant, seeded from the study's seed, and balanced over
+  the study (:mod:`study_app.ordering`): a session's block pages are placed so that each item
+  (comparison, MUSHRA segment, Likert condition) takes each position about equally often; a
+  MUSHRA page's slot order is a row of a random Latin square (each condition in each slot equally
+  often within one); pairwise A goes left or right at random, each comparison and each condition
+  on each side equally often within one;
 * attention-check pages are inserted near the block positions the definition names: each
   session moves each check by up to ``attention_window`` pages (default 2; seeded per session
   from the study's seed), never to position 0; training pages where the definition places them, flagged and excluded from
@@ -36,26 +38,10 @@ from collections import Counter
 
 from study_app.errors import StudyDefinitionError
 from study_app.model import Study
+from study_app.ordering import PositionBalancer, order_rng
 from study_app.pages import get_block_kind, get_kind
 
 PLANS_FORMAT = "evalsuite-study-plans/1"
-
-
-def williams_rows(n: int) -> list[list[int]]:
-    """Rows of a Williams balanced Latin square of order ``n`` (``2n`` rows when n is odd)."""
-    if n == 1:
-        return [[0]]
-    first, lo, hi = [0], 1, n - 1
-    while len(first) < n:
-        first.append(lo)
-        lo += 1
-        if len(first) < n:
-            first.append(hi)
-            hi -= 1
-    rows = [[(v + r) % n for v in first] for r in range(n)]
-    if n % 2:
-        rows += [list(reversed(r)) for r in rows]
-    return rows
 
 
 class _Lookup:
@@ -90,8 +76,19 @@ def build_plans(study: Study) -> dict:
     """Session plans for ``study`` as a JSON-serialisable dict (see module docstring)."""
     builder = _PlanBuilder(study)
     blocks = study.blocks
+    by_file = study.manifest.by_file()
     kinds = {bid: get_block_kind(b.type) for bid, b in blocks.items()}
     pools = {bid: kinds[bid].attention_pool(study.manifest, bid, b.cfg) for bid, b in blocks.items()}
+    # Every trial page of a block over all sessions (global index g = session * pages + j), its within-page
+    # orders drawn over the whole study, and a balancer for the page positions (study_app.ordering).
+    trials: dict[str, list[dict]] = {}
+    positions: dict[str, PositionBalancer] = {}
+    for bid, b in blocks.items():
+        k = b.cfg["pages"]
+        trials[bid] = [kinds[bid].regular_page(b, g, builder.lookup, b.cfg["segments"])
+                       for g in range(study.sessions * k)]
+        kinds[bid].arrange(b, trials[bid], order_rng(study.seed, bid, "within-page"), by_file)
+        positions[bid] = PositionBalancer(k, order_rng(study.seed, bid, "page-order"))
     check_counter: Counter = Counter()
     plans = []
     for s in range(study.sessions):
@@ -102,9 +99,9 @@ def build_plans(study: Study) -> dict:
                 continue
             kind = kinds[page.id]
             k = page.cfg["pages"]
-            regular = [kind.regular_page(page, s * k + j, builder.lookup, page.cfg["segments"]) for j in range(k)]
-            rows = williams_rows(k)
-            ordered = [regular[i] for i in rows[s % len(rows)]]
+            regular = [dict(p) for p in trials[page.id][s * k:(s + 1) * k]]
+            order = positions[page.id].arrange([kind.order_item(p, by_file) for p in regular])
+            ordered = [regular[i] for i in order]
             rng = session_rng(study.seed, page.id, s)
             checks = [kind.session_check_page(page, check_counter[page.id] + i, pools[page.id], builder.lookup,
                                               ordered, rng) for i in range(len(page.cfg["attention_checks"]))]
@@ -198,12 +195,36 @@ def read_plans(path, study: Study) -> dict:
 
 
 def balance_report(plans: dict, study: Study) -> dict:
-    """Counts that show the balance: per compared pair (with left/right), per MUSHRA slot."""
+    """Counts that show the balance: per compared pair (with left/right), per MUSHRA slot, and per page
+    position (``page_positions[(block, item, position)]``: trial pages, position among the session's trial
+    pages of the block, checks not counted)."""
     by_file = study.manifest.by_file()
-    counts: dict = {"pairs": Counter(), "mushra_slots": Counter()}
+    counts: dict = {"pairs": Counter(), "mushra_slots": Counter(), "page_positions": Counter()}
     for plan in plans["plans"]:
+        position: Counter = Counter()
         for p in plan["pages"]:
             if p.get("training") or not get_kind(p["type"]).block:
                 continue
-            get_block_kind(p["type"]).balance(p, by_file, counts)
+            kind = get_block_kind(p["type"])
+            kind.balance(p, by_file, counts)
+            if not p.get("check"):
+                counts["page_positions"][(p["block"], kind.order_item(p, by_file), position[p["block"]])] += 1
+                position[p["block"]] += 1
     return counts
+
+
+def position_spread(counts: Counter) -> dict:
+    """Per block: the largest distance of a count from its row's mean, over rows ``(block, item, ...)`` x the
+    last key (a position or side): 0 is perfect balance, up to 1 is "equally often within one"."""
+    rows: dict = {}
+    for key, n in counts.items():
+        rows.setdefault(key[:-1], {})[key[-1]] = n
+    cols: dict = {}
+    for key in counts:
+        cols.setdefault(key[0], set()).add(key[-1])
+    spread: dict = {}
+    for row, values in rows.items():
+        full = [values.get(c, 0) for c in cols[row[0]]]
+        mean = sum(full) / len(full)
+        spread[row[0]] = max(spread.get(row[0], 0.0), max(abs(v - mean) for v in full))
+    return spread

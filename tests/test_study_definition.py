@@ -11,7 +11,7 @@ import yaml
 from click.testing import CliRunner
 
 from study_app.definition import load_manifest, load_study
-from study_app.design import balance_report, build_plans, read_plans, williams_rows, write_plans
+from study_app.design import balance_report, build_plans, read_plans, write_plans
 from study_app.errors import StudyDefinitionError
 
 
@@ -238,19 +238,6 @@ def test_symlink_out_of_folder_is_refused(folder, tmp_path):
 
 
 # ------------------------------------------------------------------------------- design
-
-def test_williams_square_is_balanced():
-    for n in range(1, 9):
-        rows = williams_rows(n)
-        for r in rows:
-            assert sorted(r) == list(range(n))
-        for pos in range(n):   # each item in each position equally often
-            assert len(set(Counter(r[pos] for r in rows).values())) == 1
-        if n > 1:              # each ordered neighbour pair equally often
-            pairs = Counter((r[i], r[i + 1]) for r in rows for i in range(n - 1))
-            assert len(pairs) == n * (n - 1)
-            assert len(set(pairs.values())) == 1
-
 
 def test_plans_are_balanced(folder):
     study = load_study(folder / "study.yaml")

@@ -156,6 +156,15 @@ class BlockKind(PageKind):
         less predictable (e.g. MUSHRA: a segment the session does not rate, the check clip in a random slot)."""
         return self.check_page(block, k, pool, lookup)
 
+    def arrange(self, block: Page, pages: list[dict], rng: random.Random, by_file: dict) -> None:
+        """Draw the within-page orders of the block's trial pages (all sessions, in global order) in place,
+        random but balanced over the study (:mod:`study_app.ordering`). Default: none to draw."""
+
+    def order_item(self, spec: dict, by_file: dict) -> object:
+        """What a trial page shows, for balancing page positions (default: its segment; a kind whose pages
+        differ in what they compare returns that)."""
+        return spec.get("segment")
+
     def balance(self, spec: dict, by_file: dict, counts: dict) -> None:
         """Add this trial page to the balance counts (``counts``: name -> Counter)."""
 

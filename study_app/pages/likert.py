@@ -38,6 +38,9 @@ class LikertKind(BlockKind):
         check = pool[k % len(pool)]
         return {"type": "likert", "segment": check.segment, "stimulus": check.file, "check": True}
 
+    def order_item(self, spec: dict, by_file: dict) -> object:
+        return export_condition(by_file[spec["stimulus"]])
+
     def n_slots(self, spec: dict) -> int:
         return 1
 

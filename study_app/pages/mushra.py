@@ -1,13 +1,13 @@
 """``mushra``: several videos of one segment rated on 0-100 sliders (MUSHRA-style, ITU-R BS.1534), with
-an optional hidden reference and anchor; slot order rotates so each condition is in each slot equally
-often. Displayed side by side (``layout: grid``) or as HEMVIP does (``layout: hemvip``: one player, a
-button per video above vertical sliders on one labelled scale); ``slider_numbers: false`` hides the
-numbers."""
+an optional hidden reference and anchor; the slot order is random per page and participant, each condition
+in each slot equally often within one over the study (:mod:`study_app.ordering`). Displayed side by side
+(``layout: grid``) or as HEMVIP does (``layout: hemvip``: one player, a button per video above vertical
+sliders on one labelled scale); ``slider_numbers: false`` hides the numbers."""
 from __future__ import annotations
 
-import math
 from typing import Any
 
+from study_app.ordering import latin_slot_orders
 from study_app.pages.base import BlockKind, Media, Outcome, export_condition
 from study_app.payload import PayloadError, int_in, only_keys
 
@@ -75,12 +75,18 @@ class MushraKind(BlockKind):
         seg = segments[g % len(segments)]
         slots = [(c, "") for c in cfg["conditions"]]
         slots += [(cfg[r], r) for r in ("reference", "anchor") if cfg.get(r)]
-        # Each condition in each slot equally often over len(slots) consecutive pages; the shift moves
-        # every lcm(...) pages so slots and segments are not confounded.
-        shift = (g + g // math.lcm(len(segments), len(slots))) % len(slots)
-        slots = slots[shift:] + slots[:shift]
+        # In the block's own order; :meth:`arrange` draws each page's order.
         return {"type": "mushra", "segment": seg, "slots": [lookup.file(c, seg) for c, _ in slots],
                 "roles": [r for _, r in slots]}
+
+    def arrange(self, block: Any, pages: list[dict], rng: Any, by_file: dict) -> None:
+        """A random slot order per page, from a random Latin square per cycle of pages (each condition in each
+        slot equally often within one over the study, :func:`study_app.ordering.latin_slot_orders`)."""
+        if not pages:
+            return
+        for p, order in zip(pages, latin_slot_orders(rng, len(pages), len(pages[0]["slots"]))):
+            p["slots"] = [p["slots"][i] for i in order]
+            p["roles"] = [p["roles"][i] for i in order]
 
     def check_page(self, block: Any, k: int, pool: list, lookup: Any) -> dict:
         check = pool[k % len(pool)]
@@ -108,9 +114,10 @@ class MushraKind(BlockKind):
                 "check_slot": slot}
 
     def balance(self, spec: dict, by_file: dict, counts: dict) -> None:
+        if spec.get("check"):
+            return          # an attention-check page is not analysed
         for k, f in enumerate(spec["slots"]):
-            if k != spec.get("check_slot"):
-                counts["mushra_slots"][(spec["block"], by_file[f].condition, k)] += 1
+            counts["mushra_slots"][(spec["block"], by_file[f].condition, k)] += 1
 
     def n_slots(self, spec: dict) -> int:
         return len(spec.get("slots", []))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from study_app.ordering import balanced_sides
 from study_app.pages.base import BlockKind, Media, Outcome, ab, check_cols, export_condition, segment_for
 from study_app.payload import PayloadError, only_keys, require_dict
 from study_app.schema import load_text_items
@@ -107,6 +108,17 @@ class PairwiseKind(BlockKind):
         partner = lookup.file(conds[k % len(conds)], partner_seg)
         return {"type": "pairwise", "segment": check.segment, "a": check.file, "b": partner,
                 "position_a": "left" if (k // len(pool)) % 2 == 0 else "right", "check": True}
+
+    def arrange(self, block: Any, pages: list[dict], rng: Any, by_file: dict) -> None:
+        """A left or right per page: random, each comparison and each condition on each side equally often
+        within one over the study (:func:`study_app.ordering.balanced_sides`)."""
+        items = [(export_condition(by_file[p["a"]]), export_condition(by_file[p["b"]])) for p in pages]
+        for p, left in zip(pages, balanced_sides(rng, items)):
+            p["position_a"] = "left" if left else "right"
+
+    def order_item(self, spec: dict, by_file: dict) -> object:
+        a, b = by_file[spec["a"]], by_file[spec["b"]]
+        return (export_condition(a), export_condition(b))
 
     def balance(self, spec: dict, by_file: dict, counts: dict) -> None:
         if spec["check"]:

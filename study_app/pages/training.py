@@ -4,6 +4,7 @@ from __future__ import annotations
 from typing import Any
 
 from study_app.errors import StudyDefinitionError
+from study_app.ordering import order_rng
 from study_app.pages.base import PageKind
 
 
@@ -49,6 +50,7 @@ class TrainingKind(PageKind):
             if len(out) == n:
                 break
             cand = kind.regular_page(block, g, plan.lookup, segments)
+            kind.arrange(block, [cand], order_rng(plan.study.seed, page.id, session, g), plan.study.manifest.by_file())
             g += 1
             material = kind.material(plan.study, cand)
             if material in used:
