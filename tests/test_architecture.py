@@ -16,7 +16,7 @@ LAYERS = [
     {"evalsuite.corpus"},
     {"evalsuite.metrics", "evalsuite.features"},
     {"evalsuite.synth", "evalsuite.learned", "evalsuite.analysis", "renderers"},
-    {"evalsuite.generators", "study_app"},
+    {"evalsuite.generators", "study_app", "evalsuite.leaderboard"},
     {"evalsuite.cli", "evalsuite.demo", "evalsuite.pipeline", "evalsuite.score_command", "evalsuite.validity",
      "evalsuite.__main__", "evalsuite"},
 ]

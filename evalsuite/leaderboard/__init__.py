@@ -1,0 +1,1 @@
+"""The GENEA Leaderboard: its objective metrics and submission checks (``evalsuite validate-submission``)."""
