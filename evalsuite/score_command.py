@@ -32,7 +32,7 @@ def _fgd_family(model_path, raw: bool):
               help="Folder for the tables, JSON and figures.")
 @click.option("--joints", default=None, help="Joint preset (e.g. genea2020_upper, genea2023) or comma-separated "
               "joint names; default: every joint of the natural motion.")
-@click.option("-m", "--metrics", multiple=True, help="Metric families (kinematics, histograms, errors, distribution, "
+@click.option("-m", "--metrics", multiple=True, help="Metric families (kinematics, histograms, errors, distribution, gac, "
               "cca, beats, coupling) or metric names, comma-separated or repeated; default: all (beats with --audio, "
               "beats and coupling with --corpus).")
 @click.option("--convention", type=click.Choice(["default", "genea2020", "genea2022", "aud2repr2pose"]),
@@ -68,10 +68,16 @@ def _fgd_family(model_path, raw: bool):
               help="Also compute FGD with this trained feature extractor (needs the learned extra).")
 @click.option("--fgd-raw", is_flag=True, help="With --fgd, also the raw-space FD of whole windows (slow: one "
               "eigendecomposition of window x pose dimensions per condition).")
+@click.option("--gac", "gac_spec", default=None, metavar="CONVENTION[:KEY=VALUE,...]",
+              help="Also compute Gesture Area Coverage (gac_dice, gac_fp, gac_fn) under this convention: tonoli2024 "
+              "(the authors' code: every bone from the third joint, frontal plane, 200 x 200 units in 0.5-unit "
+              "pixels, root-locked) or wrists (the wrists' paths), with overrides such as tonoli2024:step=0.005,"
+              "range=2 for motion in metres (docs/metrics.md). -m gac alone uses tonoli2024.")
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
 @on_mismatch_option
 def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, corpus_dir, sigma, fps, resample, speed_bins,
-          acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, quiet):
+          acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, gac_spec,
+          quiet):
     """Score generated motion (CONDITIONS) against natural motion (--reference).
 
     Every folder holds one file per sequence; files are paired with the natural ones by name
@@ -88,6 +94,10 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
 
     group_list = [g.replace(";", ",") for g in groups.split(",") if g.strip()] if groups else []
     extra = [_fgd_family(fgd_model, fgd_raw)] if fgd_model is not None else []
+    if gac_spec is not None:
+        from evalsuite.metrics.families.gac import GacFamily
+
+        extra.append(GacFamily(gac_spec, default=True))
     options = ScoreOptions(joints=joints, metrics=list(metrics) or None, convention=convention, audio_dir=audio_dir,
                            corpus=corpus_dir, fps=fps, resample=resample, speed_bins=speed_bins,
                            acceleration_bins=acceleration_bins, groups=group_list, sigma=sigma, bootstrap=bootstrap,

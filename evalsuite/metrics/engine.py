@@ -70,6 +70,7 @@ class ScoreResult:
     seed: int = 0
     resampled: list[str] = field(default_factory=list)
     task_results: list[dict[str, Any]] = field(default_factory=list)   # score_plan(..., keep_task_results=True)
+    figure_data: dict[str, Any] = field(default_factory=dict)   # figure name -> condition -> data (families')
 
 
 def _load(path: pathlib.Path, setup: ScoreSetup) -> tuple[Any, list[dict[str, Any]]]:
@@ -260,6 +261,8 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]],
         out.per_sequence += ctx.per_sequence
         out.per_joint += ctx.per_joint
         out.histograms += ctx.histograms
+        for fig, data in ctx.figure_data.items():
+            out.figure_data.setdefault(fig, {}).update(data)
         issues += ctx.issues
     bar.close()
     out.files = {c: {s: {"path": r["path"], "sha256": r["sha256"], "n_frames": r["n_frames"]}

@@ -7,6 +7,9 @@
   one column per condition (top: density in the frontal plane, lateral x against height y,
   relative to the root's ground-plane position; bottom: wrist height over time in the first
   sequence) — in the spirit of Ferstl et al.'s motion-distribution figure.
+* ``gac_coverage`` (with the ``gac`` family): one column per condition; top: the share of sequences that
+  cover each pixel; bottom: the first sequence's coverage against the natural one (grey: both, red: the
+  condition only (FP), blue: natural only (FN)), as in Tonoli et al.'s figures.
 """
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ import numpy as np
 
 from evalsuite.metrics.engine import ScoreResult
 
-__all__ = ["histogram_figures", "wrist_distribution_figure", "write_figures"]
+__all__ = ["histogram_figures", "wrist_distribution_figure", "gac_figure", "write_figures"]
 
 
 def _plt() -> Any:
@@ -107,7 +110,39 @@ def wrist_distribution_figure(result: ScoreResult, out_dir: str | pathlib.Path) 
     return paths
 
 
+def gac_figure(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
+    data = result.figure_data.get("gac", {})
+    conds = [c for c in result.plan.conditions if c in data]
+    if not conds:
+        return []
+    plt = _plt()
+    fig, axes = plt.subplots(2, len(conds), figsize=(2.6 * len(conds) + 0.6, 5.6), squeeze=False)
+    for col, c in enumerate(conds):
+        d = data[c]
+        packed_own, packed_nat, shape = d["first"]
+        size = int(np.prod(shape))
+        own = np.unpackbits(packed_own)[:size].reshape(shape).astype(bool)
+        nat = np.unpackbits(packed_nat)[:size].reshape(shape).astype(bool)
+        rgb = np.ones(shape + (3,))
+        rgb[own & nat] = (0.45, 0.45, 0.45)
+        rgb[own & ~nat] = (0.85, 0.2, 0.15)
+        rgb[nat & ~own] = (0.2, 0.35, 0.85)
+        axes[0][col].imshow(d["share"], cmap="Greys", vmin=0, vmax=1, interpolation="nearest")
+        axes[0][col].set_title(c, fontsize=9)
+        axes[1][col].imshow(rgb, interpolation="nearest")
+        for ax in (axes[0][col], axes[1][col]):
+            ax.set_xticks([])
+            ax.set_yticks([])
+    axes[0][0].set_ylabel("share of sequences", fontsize=8)
+    axes[1][0].set_ylabel("first sequence: grey TP,\nred FP, blue FN", fontsize=8)
+    fig.suptitle(f"Gesture Area Coverage ({data[conds[0]]['convention']})", fontsize=9)
+    fig.tight_layout()
+    paths = _save(fig, pathlib.Path(out_dir) / "gac_coverage")
+    plt.close(fig)
+    return paths
+
+
 def write_figures(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    return histogram_figures(result, out) + wrist_distribution_figure(result, out)
+    return histogram_figures(result, out) + wrist_distribution_figure(result, out) + gac_figure(result, out)

@@ -62,9 +62,9 @@ def metric_index(families: dict[str, MetricFamily] | None = None) -> dict[str, t
 
 
 def _register_builtins() -> None:
-    from evalsuite.metrics.families import beats, cca, coupling, distribution, errors, histograms, kinematics
+    from evalsuite.metrics.families import beats, cca, coupling, distribution, errors, gac, histograms, kinematics
 
-    for module in (kinematics, histograms, errors, distribution, cca, beats, coupling):
+    for module in (kinematics, histograms, errors, distribution, cca, beats, coupling, gac):
         register_family(module.FAMILY, replace=True)
 
 

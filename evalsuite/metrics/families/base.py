@@ -158,6 +158,7 @@ class ReduceContext:
     per_joint: list[dict[str, Any]] = field(default_factory=list)
     histograms: list[dict[str, Any]] = field(default_factory=list)
     issues: list[str] = field(default_factory=list)
+    figure_data: dict[str, Any] = field(default_factory=dict)   # what a family's figure needs, by figure name
     info: dict[str, MetricInfo] = field(default_factory=dict)
     seed: int = 0
     threads: int = 1
