@@ -210,7 +210,7 @@ def test_layout_detection_is_explicit_about_ambiguity_and_unknown_folders(tmp_pa
     with pytest.raises(InputError, match=r"empty: unknown corpus layout: no layout recognises this folder. Known "
                                          r"layouts: genea2020: GENEA 2020"):
         load_corpus(tmp_path / "empty")
-    with pytest.raises(InputError, match=r"layout: unknown layout 'trinity'; known: beat, folder, genea2020"):
+    with pytest.raises(InputError, match=r"layout: unknown layout 'trinity'; known: beat, beat2, folder, genea2020"):
         load_corpus(root, layout="trinity")
 
 
@@ -299,7 +299,7 @@ def test_beat2_folders_with_smplx_npz_motion(tmp_path):
                  mocap_frame_rate=np.array(30))
     (root / "train_test_split.csv").write_text("id,type\n2_scott_0_1_1,train\n4_lawrence_0_3_3,test\n")
     c = load_corpus(root)
-    assert c.layout == "beat" and {s.id: (s.speaker, s.split) for s in c} == {
+    assert c.layout == "beat2" and {s.id: (s.speaker, s.split) for s in c} == {
         "2_scott_0_1_1": ("2", "train"), "4_lawrence_0_3_3": ("4", "test")}
     s = c.get("4_lawrence_0_3_3")
     assert s.motion.parent.name == "smplxflame_30" and s.meta["motion_duration"] == pytest.approx(2.0)

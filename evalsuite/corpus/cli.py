@@ -139,6 +139,7 @@ def summarize(c: Corpus) -> dict[str, Any]:
         "labels": sum(s.labels is not None for s in c),
         "missing": missing, "mismatches": c.meta.get("mismatches", []), "skipped": c.meta.get("skipped", []),
         "corpus_json": c.meta.get("corpus_json"), "metadata_files": c.meta.get("metadata_files"),
+        "beat2": c.meta.get("beat2"),
     }
 
 
@@ -159,6 +160,8 @@ def _print_info(info: dict[str, Any]) -> None:
     if info.get("metadata_files") is not None:  # the GENEA layouts: where the speaker ids come from
         echo("metadata:   " + (", ".join(info["metadata_files"]) or "none found (speaker ids come from metadata.csv "
                                                                      "in each split folder or at the root)"))
+    if info.get("beat2") is not None:  # languages, semantic annotations and body shapes of BEAT2
+        _print_beat2(info["beat2"])
     echo(f"audio:      {_counts(info['audio_rates'], ' Hz')}; channels {_counts(info['audio_channels'], '')}")
     echo(f"motion:     {_counts(info['motion_fps'], ' fps')}")
     echo(f"transcripts: {info['transcripts']} ({info['estimated_transcripts']} with estimated timings)")
@@ -178,6 +181,14 @@ def _print_info(info: dict[str, Any]) -> None:
     for m in info["mismatches"]:
         echo(f"MISMATCH {m['segment']}: audio {m['audio']} {m['audio_duration']:.3f} s, motion {m['motion']} "
              f"{m['motion_duration']:.3f} s (tolerance {m['tolerance']:.3f} s; {m['action']})")
+
+
+def _print_beat2(beat2: dict[str, Any]) -> None:
+    click.echo("languages:  " + (", ".join(f"{k} ({v} segments)" for k, v in beat2["languages"].items()) or "none"))
+    click.echo(f"sem:        {beat2['sem_files']} segments with semantic relevance annotations (sem/*.txt)")
+    shapes = [f"{spk}: {v['n_betas'][0] if len(v['n_betas']) == 1 else v['n_betas']} betas"
+              + ("" if v["distinct"] == 1 else f", {v['distinct']} different") for spk, v in beat2["betas"].items()]
+    click.echo("betas:      " + ("; ".join(shapes) if shapes else "none in the motion files"))
 
 
 @corpus.command()

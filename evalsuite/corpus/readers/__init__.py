@@ -1,8 +1,8 @@
 """Corpus readers: ``load_corpus(path, layout=None)`` for the layouts users have on disk.
 
 Each layout is one function registered by name (:func:`~evalsuite.corpus.readers.base.register_layout`):
-``genea2020``, ``genea2022``, ``genea2023`` (also the synthetic speaker's output), ``beat``, ``zeggs`` and
-``folder``. A new layout is one new function with a ``detect`` and a ``read``; see docs/corpus.md. An
+``genea2020``, ``genea2022``, ``genea2023`` (also the synthetic speaker's output), ``beat``, ``beat2``,
+``zeggs`` and ``folder``. A new layout is one new function with a ``detect`` and a ``read``; see docs/corpus.md. An
 installed package adds one with an entry point in the group ``evalsuite.corpus_layouts``; :data:`LAYOUTS`
 is the :class:`~evalsuite.registry.Registry`.
 """

@@ -1,9 +1,14 @@
-"""Layouts of one file per take and modality: BEAT/BEAT2, ZEGGS, and a plain folder matched by file stem."""
+"""Layouts of one file per take and modality: BEAT, BEAT2 (SMPL-X, per language folder), ZEGGS, and a plain folder
+matched by file stem."""
 from __future__ import annotations
 
 import csv
 import pathlib
 import re
+import zipfile
+from typing import Any
+
+import numpy as np
 
 from evalsuite.corpus.readers.base import CorpusBuilder, register_layout
 from evalsuite.corpus.transcripts import transcript_suffixes
@@ -68,7 +73,15 @@ def _split_table(path: pathlib.Path, id_cols: tuple[str, ...], split_cols: tuple
 
 # --- BEAT / BEAT2 --------------------------------------------------------------------------------------------
 
+def is_beat2_folder(root: pathlib.Path) -> bool:
+    """A BEAT2 language folder (it holds ``smplxflame_30/``) or a folder of them: the ``beat2`` layout's."""
+    return (root / "smplxflame_30").is_dir() or any((p / "smplxflame_30").is_dir() for p in root.iterdir()
+                                                    if p.is_dir())
+
+
 def _detect_beat(root: pathlib.Path) -> bool:
+    if is_beat2_folder(root):
+        return False  # the beat2 layout reads it (SMPL-X motion, sem, betas)
     return any(p.suffix.lower() == ".textgrid" and _BEAT.match(p.stem) for p in root.rglob("*"))
 
 
@@ -90,6 +103,100 @@ def read_beat(root: pathlib.Path, b: CorpusBuilder) -> None:
         expected = files.get("audio") or (files.get("motion") or files["transcript"]).with_suffix(".wav")
         b.add(stem, audio=expected, motion=files.get("motion"), transcript=files.get("transcript"),
               speaker=m.group(1), split=split, meta={"speaker_name": m.group(2)})
+
+
+# --- BEAT2 (SMPL-X) ------------------------------------------------------------------------------------------
+# BEAT2 as released (one folder per language, e.g. ``beat_english_v2.0.0/``): ``smplxflame_30/*.npz`` SMPL-X
+# motion at 30 fps, ``wave16k/*.wav`` speech, ``textgrid/*.TextGrid`` word timings, ``sem/*.txt`` semantic
+# relevance annotations and ``train_test_split.csv`` (``id``, ``type``: train, val, test, additional).
+#
+# The corpus root is either one language folder or a folder holding several (``BEAT2/beat_english_v2.0.0``,
+# ``BEAT2/beat_chinese_v2.0.0``, ...; their segment ids are then ``<language folder>/<take>``). Each segment has
+# the speaker id and name from the take's name (``2_scott_0_103_103``: speaker 2, scott), its language, its
+# ``sem`` file where there is one (``segment.meta['sem']``) and the body shape ``betas`` of its motion file
+# (``segment.meta['betas']``, a float64 array; the GENEA Leaderboard computes positions with the ground truth's).
+
+_LANGUAGE = re.compile(r"^beat_([a-z]+)_v[\d.]+$", re.IGNORECASE)
+
+
+def language_folders(root: pathlib.Path) -> list[pathlib.Path]:
+    """The BEAT2 language folders of ``root``: itself when it holds ``smplxflame_30/``, else its sub-folders
+    that do."""
+    if (root / "smplxflame_30").is_dir():
+        return [root]
+    return [p for p in sorted(root.iterdir()) if p.is_dir() and (p / "smplxflame_30").is_dir()]
+
+
+def _language(folder: pathlib.Path) -> str:
+    m = _LANGUAGE.match(folder.name)
+    return m.group(1).lower() if m else folder.name
+
+
+def read_betas(path: pathlib.Path) -> np.ndarray | None:
+    """The ``betas`` array of a BEAT2 ``.npz`` as float64 (the first row when stored per frame), or None when
+    the file has none."""
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            if "betas" not in npz.files:
+                return None
+            betas = np.asarray(npz["betas"], dtype=np.float64)
+    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+        raise InputError(f"cannot read betas ({exc}); expected a BEAT2 SMPL-X .npz", path=path) from None
+    return betas[0] if betas.ndim == 2 else betas.reshape(-1)
+
+
+def _stems(folder: pathlib.Path, suffix: str) -> dict[str, pathlib.Path]:
+    if not folder.is_dir():
+        return {}
+    return {p.stem: p for p in sorted(folder.iterdir())
+            if p.is_file() and p.suffix.lower() == suffix and not p.name.startswith(".") and _BEAT.match(p.stem)}
+
+
+def _read_language(folder: pathlib.Path, b: CorpusBuilder, prefix: str, summary: dict[str, Any]) -> None:
+    language = _language(folder)
+    table = folder / "train_test_split.csv"
+    splits = _split_table(table, ("id",), ("type",)) if table.is_file() else {}
+    if table.is_file():
+        b.meta.setdefault("split_tables", []).append(table.relative_to(b.root).as_posix())
+    motion = _stems(folder / "smplxflame_30", ".npz")
+    audio = _stems(folder / "wave16k", ".wav")
+    text = {p.stem: p for p in sorted((folder / "textgrid").glob("*")) if p.suffix.lower() == ".textgrid"} \
+        if (folder / "textgrid").is_dir() else {}
+    sem = _stems(folder / "sem", ".txt")
+    count = 0
+    for stem in sorted(set(motion) | set(audio)):
+        m = _BEAT.match(stem)
+        assert m is not None
+        meta: dict[str, Any] = {"language": language, "speaker_name": m.group(2)}
+        if stem in sem:
+            meta["sem"] = sem[stem]
+        if stem in motion:
+            betas = read_betas(motion[stem])
+            if betas is not None:
+                meta["betas"] = betas
+                spk = summary["betas"].setdefault(m.group(1), {"files": 0, "n_betas": set(), "shapes": set()})
+                spk["files"] += 1
+                spk["n_betas"].add(int(betas.size))
+                spk["shapes"].add(betas.tobytes())
+        b.add(f"{prefix}{stem}", audio=audio.get(stem, folder / "wave16k" / f"{stem}.wav"), motion=motion.get(stem),
+              transcript=text.get(stem), speaker=m.group(1), split=splits.get(stem, {}).get("split"), meta=meta)
+        count += 1
+        summary["sem_files"] += "sem" in meta
+    summary["languages"][language] = count
+
+
+@register_layout("beat2", detect=is_beat2_folder,
+                 description="BEAT2 (SMPL-X): per language folder smplxflame_30/*.npz, wave16k/*.wav, "
+                             "textgrid/*.TextGrid, sem/*.txt, train_test_split.csv; speaker ids from the names, "
+                             "betas from the motion")
+def read_beat2(root: pathlib.Path, b: CorpusBuilder) -> None:
+    folders = language_folders(root)
+    summary: dict[str, Any] = {"languages": {}, "sem_files": 0, "betas": {}}
+    for folder in folders:
+        _read_language(folder, b, "" if folder == root else f"{folder.name}/", summary)
+    betas = {spk: {"files": v["files"], "n_betas": sorted(v["n_betas"]), "distinct": len(v["shapes"])}
+             for spk, v in sorted(summary["betas"].items(), key=lambda kv: (len(kv[0]), kv[0]))}
+    b.meta["beat2"] = {"languages": summary["languages"], "sem_files": summary["sem_files"], "betas": betas}
 
 
 # --- ZEGGS -----------------------------------------------------------------------------------------------------
