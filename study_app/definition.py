@@ -54,7 +54,7 @@ def _read_text(path: pathlib.Path, missing: str, encoding: str) -> tuple[bytes, 
 
 def load_manifest(path) -> Manifest:
     """Read a stimulus manifest CSV (columns ``file, condition, segment`` and optionally
-    ``kind, expected, motion_segment, block, duration_s``); file names are relative to its folder."""
+    ``kind, expected, check, motion_segment, block, duration_s``); file names are relative to its folder."""
     path = pathlib.Path(path)
     raw, text = _read_text(path, "stimulus manifest not found; expected a CSV file", "utf-8-sig")
     reader = csv.DictReader(text.splitlines())
@@ -90,7 +90,7 @@ def load_manifest(path) -> Manifest:
         stim = Stimulus(file=file, condition=row["condition"], segment=row["segment"], kind=kind,
                         expected=row.get("expected", ""), motion_segment=row.get("motion_segment", ""),
                         block=row.get("block", ""), duration_s=_duration(row.get("duration_s", ""), path, lineno),
-                        line=lineno)
+                        check=row.get("check", ""), line=lineno)
         if kind == "attention" and not stim.expected:
             raise StudyDefinitionError("attention-check rows need the answer an attentive "
                                        "participant gives", path=path, line=lineno, field="expected")

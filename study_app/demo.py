@@ -6,6 +6,7 @@ for the sample conditions. Writes ``out_dir/study/study.yaml`` and its session p
 """
 from __future__ import annotations
 
+import csv
 import itertools
 import os
 import pathlib
@@ -19,7 +20,7 @@ def _stimuli(out_dir: pathlib.Path, target: pathlib.Path, echo) -> pathlib.Path:
     rendered = out_dir / "render" / "stimuli" / "manifest.csv"
     if rendered.is_file():
         echo(f"  using the rendered stimuli {rendered}")
-        return rendered
+        return silent_manifest(rendered, echo)
     from study_app.samples import make_sample_stimuli
     root = out_dir / "conditions"
     conditions = sorted(p.name for p in root.iterdir() if p.is_dir()) if root.is_dir() else []
@@ -29,6 +30,28 @@ def _stimuli(out_dir: pathlib.Path, target: pathlib.Path, echo) -> pathlib.Path:
                                attention=[(segments[0], "this"), (segments[1], "70")])
     echo(f"  no rendered stimuli found: wrote placeholder clips for {', '.join(conditions)} -> {path}")
     return path
+
+
+def silent_manifest(path: pathlib.Path, echo) -> pathlib.Path:
+    """The manifest for the demo's muted blocks: ``path`` itself, or, when it holds attention checks that
+    only sound reveals (``check = distorted_audio``), a copy without them beside it (``study-manifest.csv``):
+    in a muted block nobody could pass them, and ``study build`` refuses them there."""
+    from evalsuite.contracts.manifest import AUDIO_CHECKS
+
+    with open(path, newline="", encoding="utf-8") as fh:
+        reader = csv.DictReader(fh)
+        fields, rows = list(reader.fieldnames or []), list(reader)
+    keep = [r for r in rows if not (r.get("kind") == "attention" and r.get("check") in AUDIO_CHECKS)]
+    if len(keep) == len(rows):
+        return path
+    out = path.with_name("study-manifest.csv")
+    with open(out, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.DictWriter(fh, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(keep)
+    echo(f"  the study's blocks are muted: left out {len(rows) - len(keep)} attention check(s) that need sound "
+         f"-> {out.name}")
+    return out
 
 
 def study_definition(manifest_path: pathlib.Path, study_dir: pathlib.Path) -> dict:

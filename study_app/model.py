@@ -25,7 +25,13 @@ class Stimulus:
     motion_segment: str = ""        # mismatched stimuli: the segment the motion comes from
     block: str = ""                 # attention checks: restrict to this block id
     duration_s: float | None = None  # the clip's length (optional column; else read from the file)
+    check: str = ""                 # attention checks: how it was made (``distorted_audio``, ``instruction``, ...)
     line: int = 0
+
+    @property
+    def needs_sound(self) -> bool:
+        """An attention check only sound reveals (nobody can pass it in a muted block)."""
+        return self.kind == "attention" and self.check in manifest_contract.AUDIO_CHECKS
 
     @property
     def mismatched(self) -> bool:

@@ -47,10 +47,24 @@ def test_all_outputs_written(analysed):
     assert (out / "report.html").is_file()
     assert "Report:" in output
     excl = pd.read_csv(out / "exclusions.csv")
-    assert set(excl["reason"]) == {"mushra_post_screening", "attention_checks", "session_failed",
-                                   "duplicate_participant"}
+    # BS.1534-3 post-screening is off for gesture studies; the output says whom it would exclude
+    assert set(excl["reason"]) == {"attention_checks", "session_failed", "duplicate_participant"}
+    assert "post-screening (--preset mushra-itu) is off; it would exclude 1 session(s)" in output
     assert "\\begin{tabular}" in (out / "pairwise.tex").read_text()
     assert (out / "pairwise.md").read_text().startswith("| question | condition_a |")
+
+
+def test_mushra_itu_preset_turns_post_screening_on(tmp_path):
+    r = invoke(SAMPLE, "-o", tmp_path, "--bootstrap", "0", "--no-figures", "--preset", "mushra-itu")
+    assert r.exit_code == 0, r.output
+    excl = pd.read_csv(tmp_path / "exclusions.csv")
+    assert list(excl.loc[excl["reason"] == "mushra_post_screening", "participant"]) == ["P09"]
+    assert "it would exclude" not in r.output
+    assert "on: excludes 1 session(s)" in (tmp_path / "report.html").read_text()
+    explicit = invoke(SAMPLE, "-o", tmp_path / "off", "--bootstrap", "0", "--no-figures", "--preset", "mushra-itu",
+                      "--no-mushra-screening")
+    assert "mushra_post_screening" not in (tmp_path / "off" / "exclusions.csv").read_text()
+    assert "it would exclude 1 session(s)" in explicit.output
 
 
 def test_no_nan_text_anywhere(analysed):
@@ -74,7 +88,7 @@ def test_html_embeds_every_figure_as_base64_png(analysed):
         assert p.read_bytes() in embedded, p.name
     assert all(b.startswith(b"\x89PNG\r\n\x1a\n") for b in embedded)
     assert "<h2>Exclusions</h2>" in html
-    assert "mushra_post_screening" in html
+    assert "off (would exclude 1 session(s))" in html
     assert "<script" not in html and "http" not in html.replace("http-equiv", "")  # self-contained
 
 

@@ -389,7 +389,7 @@ def test_cli_errors_are_one_line(real, tmp_path):
     r = invoke("correlate", summary, ratings, "--rename", "NA=natural", "-o", tmp_path / "x")
     assert r.exit_code == 1 and "but not the scores: NA" in r.output and "but not the human judgements: natural" in r.output
     changed = tmp_path / "ratings.csv"
-    changed.write_text(ratings.read_text().replace(",SysA,,36,9,67.5,", ",SysA,,36,9,60.0,"))
+    changed.write_text(ratings.read_text().replace(",SysA,,40,10,67.5,", ",SysA,,40,10,60.0,"))
     r = invoke("correlate", summary, changed, "--results", SAMPLE, "-o", tmp_path / "x")
     assert r.exit_code == 1 and "median of 'SysA' is 60 here but 67.5 recomputed" in r.output
     r = invoke("correlate", summary, ratings, "--metric", "nope", "-o", tmp_path / "x")

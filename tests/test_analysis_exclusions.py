@@ -98,13 +98,15 @@ def test_bs1534_post_screening_counts_items_not_single_ratings():
     assert s.loc["B", "excluded"]
     assert not s.loc[["A", "C", "D"], "excluded"].any()
     assert (s.loc["B", "n_low"], s.loc["B", "n_items"]) == (2, 10)
-    r = apply_exclusions(df)
+    r = apply_exclusions(df, mushra_screening=True)
     # pymushra drops everyone with any low reference rating (A, B and C); the rule drops only B.
     assert list(r.table["participant"]) == ["B"]
     assert r.table["reason"].iloc[0] == "mushra_post_screening"
     assert "2 of 10 items" in r.table["detail"].iloc[0]
-    off = apply_exclusions(df, mushra_screening=False)
+    # Off by default (a listening-test rule; natural motion is no ceiling), counted either way.
+    off = apply_exclusions(df)
     assert off.table.empty
+    assert off.summary["mushra_screening_would_exclude"] == r.summary["mushra_screening_would_exclude"] == 1
 
 
 def test_everyone_excluded_leaves_empty_data():

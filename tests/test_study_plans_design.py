@@ -143,3 +143,61 @@ def test_attention_window_is_validated(folder):
 
     with pytest.raises(StudyDefinitionError, match=r"attention_window"):
         _variant(folder, bad, "badwindow.yaml")
+
+
+def _with_audio_check(folder, block_column=""):
+    """The helper manifest with its 'good' MUSHRA check marked as a distorted-audio clip."""
+    import csv
+
+    src = folder / "stim" / "manifest.csv"
+    rows = list(csv.DictReader(src.open(newline="")))
+    for r in rows:
+        r["check"] = "distorted_audio" if r["expected"] == "good" else ("instruction" if r["kind"] else "")
+        r["block"] = block_column if r["expected"] == "good" else ""
+    out = folder / "stim" / f"audio{block_column}.csv"
+    with out.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=[*rows[0]])
+        w.writeheader()
+        w.writerows(rows)
+    line = 2 + next(i for i, r in enumerate(rows) if r["expected"] == "good")
+    return out.name, line
+
+
+def test_an_audio_check_in_a_muted_block_is_refused(folder):
+    name, line = _with_audio_check(folder)
+    with pytest.raises(StudyDefinitionError) as err:
+        _variant(folder, lambda d: d.update(stimuli=f"stim/{name}"), "deaf.yaml")
+    msg = str(err.value)
+    assert f"{name} line {line}" in msg and "check distorted_audio" in msg and "'ratings' is muted" in msg
+    assert err.value.field == "pages[6].attention_checks"
+    # unmuted, or the clip kept for another block: accepted, and the muted block never shows it
+    def unmuted(d):
+        d.update(stimuli=f"stim/{name}")
+        next(p for p in d["pages"] if p["id"] == "ratings")["muted"] = False
+
+    assert _variant(folder, unmuted, "loud.yaml").page("ratings").cfg["muted"] is False
+    other, _ = _with_audio_check(folder, block_column="stmts")
+    study = _variant(folder, lambda d: d.update(stimuli=f"stim/{other}"), "elsewhere.yaml")
+    by_file = study.manifest.by_file()
+    shown = {f for plan in build_plans(study)["plans"] for p in plan["pages"] for f in p.get("slots", [])}
+    assert not any(by_file[f].needs_sound for f in shown)
+
+
+def test_the_demo_leaves_audio_checks_out_of_its_muted_blocks(folder, tmp_path):
+    from study_app.demo import silent_manifest, study_definition
+
+    name, _ = _with_audio_check(folder)
+    path = silent_manifest(folder / "stim" / name, lambda *a: None)
+    assert path.name == "study-manifest.csv"
+    assert "distorted_audio" not in path.read_text()
+    target = folder / "demo-study"
+    target.mkdir(exist_ok=True)
+    (target / "study.yaml").write_text(yaml.safe_dump(study_definition(path, target), sort_keys=False))
+    study = load_study(target / "study.yaml")
+    assert all(b.cfg["muted"] for b in study.blocks.values())
+    assert build_plans(study)["plans"]
+    # the definition on the full manifest puts the audio check in the muted MUSHRA block: refused
+    (target / "full.yaml").write_text(yaml.safe_dump(study_definition(folder / "stim" / name, target)))
+    with pytest.raises(StudyDefinitionError, match="needs sound"):
+        load_study(target / "full.yaml")
+    assert silent_manifest(folder / "stim" / "manifest.csv", print) == folder / "stim" / "manifest.csv"

@@ -51,8 +51,10 @@ def _playback(value):
 @click.option("--keep-incomplete", is_flag=True, help="Keep sessions with status 'incomplete' (failed ones never).")
 @click.option("--duplicates", type=click.Choice(["keep-first", "drop-all"]), default="keep-first",
               show_default=True, help="A participant id with several sessions: keep the earliest or drop all.")
-@click.option("--no-mushra-screening", is_flag=True,
-              help="Skip BS.1534-3 post-screening (hidden reference < 90 on > 15% of items).")
+@click.option("--mushra-screening/--no-mushra-screening", default=False, show_default=True,
+              help="BS.1534-3 post-screening: exclude a session rating the hidden reference < 90 on > 15% of its "
+                   "items. A listening-test rule, off for gesture studies (natural motion is no ceiling); "
+                   "the output says how many sessions it would exclude. --preset mushra-itu turns it on.")
 @click.option("--implausible-playback", default="1", show_default=True, callback=lambda c, p, v: _playback(v),
               help="Exclude a session with at least this many pages the study server flagged playback_implausible "
                    "(a video never fetched, or answered faster than the clips last); 'off' = 0 = keep them.")
@@ -67,7 +69,8 @@ def _playback(value):
 @click.option("--preset", type=click.Choice(sorted(PRESETS)), default=None,
               help="Reproduce a published procedure; 'leaderboard': Elo prior 0, 10000 participant-bootstrap "
                    "rounds drawn as the Leaderboard draws them (seed 42), exclusion on any failed attention "
-                   "check, ties as half wins. Options given explicitly override it.")
+                   "check, ties as half wins; 'mushra-itu': BS.1534-3 post-screening of assessors on the hidden "
+                   "reference. Options given explicitly override it.")
 @click.option("--mismatch-suffix", default=":mismatched", show_default=True,
               help="Condition X + this suffix is X's mismatched stimulus (matched/mismatched designs).")
 @click.option("--no-figures", is_flag=True, help="Tables only (faster).")
@@ -79,7 +82,7 @@ def _playback(value):
                    "(see `evalsuite correlate`).")
 @click.pass_context
 def analyze(ctx, results, out_dir, study, tie_policy, ci_method, holm_per_question, alpha, attention_fails,
-            keep_incomplete, duplicates, no_mushra_screening, implausible_playback, zero_method, n_boot, seed,
+            keep_incomplete, duplicates, mushra_screening, implausible_playback, zero_method, n_boot, seed,
             elo_prior, preset, mismatch_suffix, no_figures, blind, reveal, scores=None):
     """Analyse RESULTS (a study's results.csv or a battles CSV).
 
@@ -99,14 +102,14 @@ def analyze(ctx, results, out_dir, study, tie_policy, ci_method, holm_per_questi
 
         read_scores(scores)  # a malformed file stops here, before any statistic is computed
     given = {"tie_policy": tie_policy, "attention_fails": attention_fails, "n_boot": n_boot, "seed": seed,
-             "elo_prior": elo_prior}
+             "elo_prior": elo_prior, "mushra_screening": mushra_screening}
     values = dict(given)
     for name, value in preset_values(preset).items():
         if name not in given or ctx.get_parameter_source(name) == click.core.ParameterSource.DEFAULT:
             values[name] = value
     opts = AnalysisOptions(ci_method=ci_method, holm_scope="question" if holm_per_question else "study",
                            alpha=alpha, keep_incomplete=keep_incomplete, duplicates=duplicates,
-                           mushra_screening=not no_mushra_screening, implausible_playback=implausible_playback,
+                           implausible_playback=implausible_playback,
                            zero_method=zero_method, mismatch_suffix=mismatch_suffix, study=study,
                            figures=not no_figures, preset=preset, scores=str(scores) if scores else None,
                            **values)

@@ -10,10 +10,13 @@ Rules (each can exclude a whole session; a session may collect several reasons):
 - ``attention_checks``: the session failed ``>= attention_fails`` attention checks
   (default 2, Prolific's rule and GENEA 2022; ``1`` = any failure, as the GENEA
   Leaderboard analysis does).
-- ``mushra_post_screening`` (ITU-R BS.1534-3): the hidden reference (``role ==
-  "reference"``) was rated below 90 on more than 15 % of the session's MUSHRA items
-  (an item = one page x question holding a hidden reference). The rule counts items per
-  assessor; it does not drop an assessor for a single low reference rating.
+- ``mushra_post_screening`` (ITU-R BS.1534-3; off unless asked for, e.g. with the ``mushra-itu``
+  preset): the hidden reference (``role == "reference"``) was rated below 90 on more than 15 % of
+  the session's MUSHRA items (an item = one page x question holding a hidden reference). The rule
+  counts items per assessor; it does not drop an assessor for a single low reference rating. It is
+  a listening-test rule, where the hidden reference is the known ceiling; in gesture studies
+  natural motion is not a ceiling and participants are not told it is there, so honest raters
+  fail it. The summary says how many sessions it would exclude either way.
 - ``implausible_playback``: at least ``implausible_playback`` pages of the session (default 1; 0 = off)
   are flagged ``playback_implausible`` by the study server (a video never fetched, or less time on the page
   than its clips last: the media were not really played, whatever the browser reported). Training and
@@ -97,7 +100,7 @@ def _session_order(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incomplete: bool = False,
-                     duplicates: str = "keep-first", mushra_screening: bool = True,
+                     duplicates: str = "keep-first", mushra_screening: bool = False,
                      reference_threshold: float = 90.0, reference_max_fraction: float = 0.15,
                      implausible_playback: int = 1) -> ExclusionResult:
     """Apply the exclusion rules (module docstring) and return the rows to analyse."""
@@ -192,6 +195,8 @@ def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incompl
         "duplicates": duplicates,
         "keep_incomplete": keep_incomplete,
         "mushra_screening": mushra_screening,
+        # How many sessions BS.1534-3 post-screening excludes (on) or would exclude (off).
+        "mushra_screening_would_exclude": int(screening["excluded"].sum()),
         "implausible_playback": implausible_playback,
         "sessions_with_implausible_playback": int(flagged.index.get_level_values("session").nunique()),
     }

@@ -32,7 +32,7 @@ class AnalysisOptions:
     attention_fails: int = 2
     keep_incomplete: bool = False
     duplicates: str = "keep-first"
-    mushra_screening: bool = True
+    mushra_screening: bool = False    # BS.1534-3 post-screening: the ``mushra-itu`` preset
     implausible_playback: int = 1
     zero_method: str = "wilcox"
     n_boot: int = 1000
@@ -93,6 +93,9 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
     echo(f"Participants: {s['participants_total']} ({s['sessions_total']} sessions); "
          f"excluded sessions: {s['sessions_excluded']}; analysed: {s['sessions_included']} sessions, "
          f"{s['rows_analysed']} judgements")
+    if s["mushra_screening_would_exclude"] and not opt.mushra_screening:
+        echo(f"BS.1534-3 post-screening (--preset mushra-itu) is off; it would exclude "
+             f"{s['mushra_screening_would_exclude']} session(s) (hidden reference < 90 on > 15% of items)")
     T = res.tables
     T["exclusions"] = excl.table
     T["rows_excluded"] = rows_excluded

@@ -13,6 +13,11 @@
 - exclusions: a session failing any attention check is dropped (``attention_fails = 1``);
 - preference shares: ties count half a win each way (``tie_policy = "half"``).
 
+``mushra-itu`` -- a listening test by ITU-R BS.1534-3 (MUSHRA): its post-screening of assessors
+(exclude a session that rates the hidden reference below 90 on more than 15 % of its items). Off
+otherwise: in gesture studies natural motion is no ceiling and participants are not told it is
+there (``analyze`` says how many sessions the rule would exclude).
+
 Options given explicitly on the command line override the preset's values.
 """
 from __future__ import annotations
@@ -20,6 +25,7 @@ from __future__ import annotations
 PRESETS: dict[str, dict] = {
     "leaderboard": {"elo_prior": 0.0, "n_boot": 10_000, "seed": 42, "bootstrap_sampler": "leaderboard",
                     "attention_fails": 1, "tie_policy": "half"},
+    "mushra-itu": {"mushra_screening": True},
 }
 
 

@@ -17,6 +17,7 @@ from collections import defaultdict
 
 import pandas as pd
 
+from evalsuite.analysis.exclusions import mushra_post_screening
 from evalsuite.analysis.report import elo_method
 
 IDENTIFIERS = ("question", "scale", "test", "condition", "condition_a", "condition_b", "condition_1",
@@ -103,7 +104,9 @@ def settings_rows(opt, raw: pd.DataFrame, tables: dict, path_label: str) -> pd.D
             rows.append(("attention checks", "exclude on any failure" if opt.attention_fails == 1
                          else f"exclude at >= {opt.attention_fails} failures"))
         if (raw["page_type"] == "mushra").any() and (raw["role"] == "reference").any():
-            rows.append(("BS.1534-3 post-screening", "on" if opt.mushra_screening else "off"))
+            n = int(mushra_post_screening(raw)["excluded"].sum())
+            rows.append(("BS.1534-3 post-screening (preset mushra-itu)",
+                         f"on: excludes {n} session(s)" if opt.mushra_screening else f"off (would exclude {n} session(s))"))
         if "playback_implausible" in raw.columns:
             flagged = raw.loc[raw["playback_implausible"].astype(str) == "1", "session"].nunique()
             rows.append(("implausible playback", (f"exclude at >= {opt.implausible_playback} flagged pages"

@@ -2,12 +2,12 @@
 
 Written by ``evalsuite render stimuli`` (:mod:`renderers.stimuli`, all of :data:`COLUMNS`), read by the study
 app (:func:`study_app.definition.load_manifest`), which needs :data:`REQUIRED` and reads the optional
-``kind``, ``expected``, ``motion_segment``, ``block`` and ``duration_s`` (seconds; the server checks time on
-a page against it). A hand-made manifest needs only the required ones.
+``kind``, ``expected``, ``check``, ``motion_segment``, ``block`` and ``duration_s`` (seconds; the server checks
+time on a page against it). A hand-made manifest needs only the required ones.
 """
 from __future__ import annotations
 
-__all__ = ["COLUMNS", "REQUIRED", "KINDS"]
+__all__ = ["COLUMNS", "REQUIRED", "KINDS", "AUDIO_CHECKS"]
 
 # In the order the renderer writes them.
 COLUMNS = ("file", "condition", "segment", "kind", "expected", "sha256", "check", "source_file",
@@ -16,3 +16,5 @@ COLUMNS = ("file", "condition", "segment", "kind", "expected", "sha256", "check"
 REQUIRED = ("file", "condition", "segment")
 # Row kinds: a stimulus of a condition, or an attention-check video (``expected``: the attentive answer).
 KINDS = ("stimulus", "attention")
+# Attention checks (``check`` column) that only sound reveals: unusable in a muted block.
+AUDIO_CHECKS = ("distorted_audio",)

@@ -239,10 +239,18 @@ class BlockKind(PageKind):
         cfg["attention_window"] = chk.int_range(page, "attention_window", where, 0, 1000, default=2)
         if checks:
             block_id = page["id"] if isinstance(page.get("id"), str) else ""
-            if not self.attention_pool(manifest, block_id, cfg):
+            pool = self.attention_pool(manifest, block_id, cfg)
+            if not pool:
                 chk.fail(f"{where}.attention_checks", f"no attention-check stimulus in {manifest.path.name} "
                          f"fits a {self.name} page (kind=attention with a valid expected answer"
                          + self.attention_hint + ")")
+            deaf = [s for s in pool if s.needs_sound] if cfg["muted"] else []
+            if deaf:
+                s = deaf[0]
+                chk.fail(f"{where}.attention_checks", f"{manifest.path.name} line {s.line}: attention check "
+                         f"{s.file!r} (check {s.check}) needs sound, but block {block_id!r} is muted, so nobody "
+                         f"can pass it; set its block column to an unmuted block, remove the row, or set muted: "
+                         f"false" + (f" ({len(deaf)} such clips)" if len(deaf) > 1 else ""))
 
     attention_hint: ClassVar[str] = ""
 

@@ -63,7 +63,7 @@ class ParticipantResampler:
 
     @classmethod
     def from_results(cls, path, *, study=None, attention_fails: int = 2, keep_incomplete: bool = False,
-                     duplicates: str = "keep-first", mushra_screening: bool = True, implausible_playback: int = 1,
+                     duplicates: str = "keep-first", mushra_screening: bool = False, implausible_playback: int = 1,
                      mismatch_suffix: str = ":mismatched", elo_prior: float = 0.1) -> ParticipantResampler:
         """Read ``path`` (results.csv or battles CSV) and apply ``evalsuite analyze``'s exclusions (its options,
         same defaults); ``elo_prior``: analyze's ``--elo-prior``."""
