@@ -14,14 +14,14 @@ from evalsuite.corpus.cli import on_mismatch_option
 from evalsuite.errors import InputError
 
 
-def _fgd_family(model_path, raw: bool):
+def _fgd_family(model_path, raw: bool, n: int | None = None, infinity: bool = False):
     """The FGD metric family for this run (needs the learned extra: torch)."""
     try:
         from evalsuite.learned.family import FGDFamily
     except ImportError as exc:
         raise InputError(f"--fgd needs the learned extra ({exc}): pip install 'evalsuite[learned]'",
                          field="fgd") from None
-    return FGDFamily(model_path, raw=raw)
+    return FGDFamily(model_path, raw=raw, n=n, infinity=infinity)
 
 
 @click.command()
@@ -68,6 +68,11 @@ def _fgd_family(model_path, raw: bool):
               help="Also compute FGD with this trained feature extractor (needs the learned extra).")
 @click.option("--fgd-raw", is_flag=True, help="With --fgd, also the raw-space FD of whole windows (slow: one "
               "eigendecomposition of window x pose dimensions per condition).")
+@click.option("--fgd-n", "fgd_n", type=click.IntRange(min=2), default=None, metavar="N",
+              help="With --fgd, also FGD on N windows per side (row fgd[n=N]): 200 draws without replacement, their "
+              "mean and 2.5-97.5 percentiles, so FGDs from different numbers of windows compare.")
+@click.option("--fgd-inf", is_flag=True, help="With --fgd, also FGD extrapolated to infinitely many windows (row "
+              "fgd_inf; Chong & Forsyth): FGD at 10 sizes from N/5 to N fitted against 1/N, with figure fgd_inf.")
 @click.option("--gac", "gac_spec", default=None, metavar="CONVENTION[:KEY=VALUE,...]",
               help="Also compute Gesture Area Coverage (gac_dice, gac_fp, gac_fn) under this convention: tonoli2024 "
               "(the authors' code: every bone from the third joint, frontal plane, 200 x 200 units in 0.5-unit "
@@ -76,8 +81,8 @@ def _fgd_family(model_path, raw: bool):
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
 @on_mismatch_option
 def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, corpus_dir, sigma, fps, resample, speed_bins,
-          acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, gac_spec,
-          quiet):
+          acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, fgd_n,
+          fgd_inf, gac_spec, quiet):
     """Score generated motion (CONDITIONS) against natural motion (--reference).
 
     Every folder holds one file per sequence; files are paired with the natural ones by name
@@ -93,7 +98,9 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
     from evalsuite.metrics.report import format_table, grouped_issues, summary_frame, write_outputs
 
     group_list = [g.replace(";", ",") for g in groups.split(",") if g.strip()] if groups else []
-    extra = [_fgd_family(fgd_model, fgd_raw)] if fgd_model is not None else []
+    if fgd_model is None and (fgd_n is not None or fgd_inf):
+        raise InputError("--fgd-n and --fgd-inf need a model: pass --fgd MODEL", field="fgd-n")
+    extra = [_fgd_family(fgd_model, fgd_raw, fgd_n, fgd_inf)] if fgd_model is not None else []
     if gac_spec is not None:
         from evalsuite.metrics.families.gac import GacFamily
 

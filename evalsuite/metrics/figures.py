@@ -10,6 +10,8 @@
 * ``gac_coverage`` (with the ``gac`` family): one column per condition; top: the share of sequences that
   cover each pixel; bottom: the first sequence's coverage against the natural one (grey: both, red: the
   condition only (FP), blue: natural only (FN)), as in Tonoli et al.'s figures.
+* ``fgd_inf`` (with ``--fgd MODEL --fgd-inf``): FGD against 1/N per condition, the draws (dots), their
+  means and the fitted line down to its intercept FGD∞ at 1/N = 0 (Chong & Forsyth's figure for FID).
 """
 from __future__ import annotations
 
@@ -20,7 +22,7 @@ import numpy as np
 
 from evalsuite.metrics.engine import ScoreResult
 
-__all__ = ["histogram_figures", "wrist_distribution_figure", "gac_figure", "write_figures"]
+__all__ = ["histogram_figures", "wrist_distribution_figure", "gac_figure", "fgd_inf_figure", "write_figures"]
 
 
 def _plt() -> Any:
@@ -142,7 +144,32 @@ def gac_figure(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib
     return paths
 
 
+def fgd_inf_figure(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
+    data = result.figure_data.get("fgd_inf", {})
+    if not data:
+        return []
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for cond, d in data.items():
+        x = 1.0 / np.asarray(d["ns"], dtype=float)
+        draws = np.asarray(d["draws"])
+        line = ax.plot([0.0, x.max()], [d["value"], d["value"] + d["slope"] * x.max()], lw=1.2,
+                       label=f"{cond}: FGD∞ = {d['value']:.4g}")[0]
+        ax.scatter(np.repeat(x, draws.shape[1]), draws.ravel(), s=4, alpha=0.3, color=line.get_color())
+        ax.plot(x, d["fgd_n"], "o", ms=4, color=line.get_color())
+    ax.set_xlim(left=0.0)
+    ax.set_xlabel("1 / N (N: windows per side)")
+    ax.set_ylabel("FGD")
+    ax.set_title("FGD against 1/N and its extrapolation to N = ∞", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths = _save(fig, pathlib.Path(out_dir) / "fgd_inf")
+    plt.close(fig)
+    return paths
+
+
 def write_figures(result: ScoreResult, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    return histogram_figures(result, out) + wrist_distribution_figure(result, out) + gac_figure(result, out)
+    return (histogram_figures(result, out) + wrist_distribution_figure(result, out) + gac_figure(result, out)
+            + fgd_inf_figure(result, out))
