@@ -78,15 +78,19 @@ def _fgd_family(model_path, raw: bool, n: int | None = None, infinity: bool = Fa
               "(the authors' code: every bone from the third joint, frontal plane, 200 x 200 units in 0.5-unit "
               "pixels, root-locked) or wrists (the wrists' paths), with overrides such as tonoli2024:step=0.005,"
               "range=2 for motion in metres (docs/metrics.md). -m gac alone uses tonoli2024.")
+@click.option("--samples", type=click.Choice(["first", "each"]), default="first", show_default=True,
+              help="Conditions with several samples per sequence (<name>_<k> files, k a number, first = lowest k): "
+              "score the first sample, or each sample index and report the mean over them (summary.csv column "
+              "samples; metrics that take every sample at once say all).")
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
 @on_mismatch_option
 def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, corpus_dir, sigma, fps, resample, speed_bins,
           acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, fgd_n,
-          fgd_inf, gac_spec, quiet):
+          fgd_inf, gac_spec, samples, quiet):
     """Score generated motion (CONDITIONS) against natural motion (--reference).
 
-    Every folder holds one file per sequence; files are paired with the natural ones by name
-    (stem). Condition names are the folder names, or give NAME=FOLDER. Writes summary.csv
+    Every folder holds one file per sequence, or several samples <name>_<k>; files are paired with
+    the natural ones by name (stem). Condition names are the folder names, or give NAME=FOLDER. Writes summary.csv
     (long form: condition, metric, value, unit, ci_low, ci_high, ...), per_sequence.csv,
     per_joint.csv, histograms.csv, results.json (with provenance and file hashes),
     summary.md, summary.tex and figures/ (PNG and SVG).
@@ -109,7 +113,7 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
                            corpus=corpus_dir, fps=fps, resample=resample, speed_bins=speed_bins,
                            acceleration_bins=acceleration_bins, groups=group_list, sigma=sigma, bootstrap=bootstrap,
                            seed=seed, jobs=jobs, dask_address=dask_address, strict=strict, progress=not quiet,
-                           figures=not no_figures, extra_families=extra)
+                           figures=not no_figures, extra_families=extra, samples=samples)
     result = score_folders(reference, conditions, options)
     paths = write_outputs(result, out_dir)
     figures = [] if no_figures else write_figures(result, out_dir / "figures")

@@ -42,6 +42,7 @@ from evalsuite.metrics.families import (
 from evalsuite.metrics.histograms import automatic_edges
 from evalsuite.metrics.options import ScoreOptions, ScoreSetup, ScoreTask
 from evalsuite.metrics.planning import Plan, plan_scoring, resolve_groups, resolve_metrics
+from evalsuite.metrics.samples import expand_for_each, label_samples
 from evalsuite.metrics.tracks import wrist_track
 from evalsuite.motion.io import load_motion
 from evalsuite.parallel import run
@@ -305,10 +306,9 @@ def tasks_for(plan: Plan, setup: ScoreSetup) -> list[ScoreTask]:
 
 
 def score_plan(plan: Plan, options: ScoreOptions, *, keep_task_results: bool = False) -> ScoreResult:
-    """Score a plan: setup -> tasks -> run -> reduce (see the module docstring) -> :class:`ScoreResult`.
-
-    With ``keep_task_results``, ``result.task_results`` holds every task's result as :func:`score_sequence`
-    returned it (in task order), e.g. to reduce resamples of the sequences again."""
+    """Score a plan: setup -> tasks -> run -> reduce (module docstring) -> :class:`ScoreResult`; ``plan.samples`` as
+    ``options.samples`` says. ``keep_task_results``: ``result.task_results`` holds each task's result in order."""
+    given, plan = plan, expand_for_each(plan) if options.samples == "each" else plan
     setup = setup_for(plan, options)
     tasks = tasks_for(plan, setup)
     kept: list[dict[str, Any]] | None = [] if keep_task_results else None
@@ -317,6 +317,7 @@ def score_plan(plan: Plan, options: ScoreOptions, *, keep_task_results: bool = F
                   progress=options.progress, weights=[len(t.entries) for t in tasks], desc="scoring",
                   consume=folder, describe=ScoreTask.describe)
     out = reduce_results(plan, setup, results, options, acc=folder.acc)
+    label_samples(out, given, options.samples, setup.family_objects)
     out.task_results = kept if kept is not None else []
     return out
 

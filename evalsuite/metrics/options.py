@@ -70,6 +70,9 @@ class ScoreOptions:
     """Keep what the figures need (wrist tracks)."""
     extra_families: Sequence[MetricFamily] = ()
     """Metric families for this run only (e.g. FGD with a trained model), added to the registered ones."""
+    samples: str = "first"
+    """Several samples per sequence (``<name>_<k>`` files): score the ``first`` of each, or ``each`` sample index and
+    report the mean over them (evalsuite.metrics.samples); metrics that take all samples at once say ``all``."""
 
     def __post_init__(self) -> None:
         for name in ("joints", "metrics", "groups", "extra_families"):
@@ -78,6 +81,8 @@ class ScoreOptions:
                 object.__setattr__(self, name, tuple(value))
         for name in ("speed_bins", "acceleration_bins"):
             object.__setattr__(self, name, parse_bins(getattr(self, name)))
+        if self.samples not in ("first", "each"):
+            raise InputError(f"samples must be 'first' or 'each', got {self.samples!r}", field="samples")
 
     def replace(self, **changes: Any) -> ScoreOptions:
         """A copy with ``changes``; a name that is no option is a ``TypeError`` naming the closest ones."""

@@ -1,9 +1,10 @@
 """Planning a scoring run: which files pair with which, which joints and groups, which metrics.
 
 :func:`plan_scoring` lists the motion files of the natural (reference) folder and of each condition
-folder (:func:`evalsuite.motion.io.list_motion_files`), pairs them by file name (stem) and decides the
-joint set; :func:`resolve_metrics` turns family and metric names into the metric list of the registered
-families (:mod:`evalsuite.metrics.families`).
+folder (:func:`evalsuite.motion.io.list_motion_files`), pairs them by file name (stem), recognising several
+samples of a sequence (``<name>_<k>``, :mod:`evalsuite.metrics.samples`), and decides the joint set;
+:func:`resolve_metrics` turns family and metric names into the metric list of the registered families
+(:mod:`evalsuite.metrics.families`).
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from typing import Any
 
 from evalsuite.errors import InputError, did_you_mean
 from evalsuite.metrics.families import MetricFamily, metric_index, registered_families
+from evalsuite.metrics.samples import split_samples
 from evalsuite.motion.io import list_motion_files, load_motion
 from evalsuite.motion.presets import PRESETS, resolve_joints
 
@@ -39,6 +41,9 @@ class Plan:
     issues: list[str]
     joints: list[str]
     segments: dict[str, Any] = field(default_factory=dict)   # sequence -> corpus Segment (with --corpus)
+    # condition -> sequence -> every sample's file in k order, for sequences with several (<name>_<k> files);
+    # files[condition][sequence] is then the first (evalsuite.metrics.samples)
+    samples: dict[str, dict[str, list[pathlib.Path]]] = field(default_factory=dict)
 
 
 def resolve_metrics(spec: str | Sequence[str] | None, audio: bool,
@@ -167,6 +172,12 @@ def plan_scoring(reference: str | pathlib.Path, conditions: Sequence[str | pathl
         raise InputError(f"condition names must be unique, {', '.join(dupes)} appears twice; "
                          "name them with NAME=FOLDER", field="condition")
     files = {n: list_motion_files(p, what=f"condition {n!r}") for n, p in pairs}
+    samples: dict[str, dict[str, list[pathlib.Path]]] = {}
+    for n in names[1:]:  # <name>_<k> files are samples of the natural sequence <name>
+        firsts, several, other = split_samples(files[n], files[ref_name])
+        files[n] = {**firsts, **other}
+        if several:
+            samples[n] = several
     issues = _pairing_issues(files, ref_name, names[1:], strict)
     ref_names = sorted(files[ref_name])
     audio = _audio_files(audio_dir, ref_names, issues) if audio_dir is not None else {}
@@ -198,7 +209,7 @@ def plan_scoring(reference: str | pathlib.Path, conditions: Sequence[str | pathl
         joint_list = sorted(dict.fromkeys(joint_list), key=order.__getitem__)
     else:
         joint_list = list(available)
-    return Plan(ref_name, names, dict(pairs), files, ref_names, audio, issues, joint_list, segments)
+    return Plan(ref_name, names, dict(pairs), files, ref_names, audio, issues, joint_list, segments, samples)
 
 
 def find_group(group: str, names: Sequence[str]) -> list[str]:

@@ -1,7 +1,7 @@
 """Writing a scoring run: CSV (long form), JSON with provenance, Markdown, LaTeX, terminal table.
 
 ``summary.csv`` has the stable columns ``condition, metric, value, unit, ci_low, ci_high``
-followed by ``std, n, better, convention`` (other tools read it; new columns go at the end).
+followed by ``std, n, better, convention, samples, n_samples`` (other tools read it; new columns go at the end).
 """
 from __future__ import annotations
 

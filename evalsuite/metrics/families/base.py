@@ -31,13 +31,16 @@ NAN_CI = (NAN, NAN)
 @dataclass(frozen=True)
 class MetricInfo:
     """A metric's name, unit and direction. ``unit_order`` (1, 2, 3) takes the unit from the convention
-    (e.g. ``units/s^2``); otherwise ``unit`` is used as it is."""
+    (e.g. ``units/s^2``); otherwise ``unit`` is used as it is. ``samples``: how the metric uses several samples
+    per sequence (:mod:`evalsuite.metrics.samples`): None follows the run's ``samples`` option (``first`` or
+    ``each``); ``"all"`` for a metric that takes every sample at once (its family reads ``plan.samples``)."""
 
     name: str
     unit: str = ""
     better: str = "lower"            # "lower" | "higher" | "closer to natural"
     unit_order: int | None = None
     description: str = ""
+    samples: str | None = None       # "all": takes every sample itself; None: as ``--samples`` (first | each)
 
     def unit_for(self, conv: Convention) -> str:
         return conv.unit(self.unit_order) if self.unit_order else self.unit
