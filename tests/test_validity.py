@@ -98,6 +98,16 @@ def test_the_command_writes_the_table_figure_and_scores(run):
     assert table[("ape", "offset")]["verdict"] == "correct"
 
 
+@pytest.mark.slow
+def test_the_command_reports_the_mismatch_test(run):
+    out, _, _ = run
+    with open(out / "mismatch.csv", newline="") as fh:
+        rows = {(r["metric"], r["condition"]): r for r in csv.DictReader(fh)}
+    oracle, offset = rows[("energy_speed_r", "oracle")], rows[("energy_speed_r", "offset_1.2")]
+    assert oracle["verdict"] == "sees speech" and float(oracle["effect"]) > float(offset["effect"])
+    assert "## Mismatch test" in (out / "validity.md").read_text()
+
+
 def test_tau_b_matches_scipy_including_ties():
     rng = np.random.default_rng(0)
     rows = np.vstack([rng.normal(size=(20, 5)), rng.integers(0, 3, size=(20, 5)).astype(float)])

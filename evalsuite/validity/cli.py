@@ -28,6 +28,7 @@ class ValidityRun:
     families: dict[str, list[str]]
     timings: dict[str, float] = field(default_factory=dict)
     files: list[pathlib.Path] = field(default_factory=list)
+    mismatch: list[Any] = field(default_factory=list)    # evalsuite.validity.mismatch.MismatchResult
 
 
 def _fgd_family(corpus: Any, out_dir: pathlib.Path, model: pathlib.Path | None, epochs: int, seed: int,
@@ -55,13 +56,14 @@ def _fgd_family(corpus: Any, out_dir: pathlib.Path, model: pathlib.Path | None, 
 def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, split: str = "val,test",
                    models: Sequence[str] = (), n_bootstrap: int = 200, seed: int = 0, fps: float = 30.0,
                    jobs: int = 1, fgd: bool = True, fgd_model: str | pathlib.Path | None = None,
-                   fgd_epochs: int = FGD_EPOCHS, progress: bool = True,
+                   fgd_epochs: int = FGD_EPOCHS, progress: bool = True, mismatch: bool = True,
                    echo: Callable[[str], None] = lambda s: None) -> ValidityRun:
     """Generate the benchmark's conditions on a synthetic corpus, score them, and write the validity table."""
     from evalsuite.corpus import load_corpus
     from evalsuite.generators.requests import requests_from_corpus
     from evalsuite.metrics.report import write_outputs
     from evalsuite.validity import analysis, plan, report, scoring
+    from evalsuite.validity import mismatch as mm
 
     t_all = time.perf_counter()
     out = pathlib.Path(out_dir)
@@ -111,6 +113,16 @@ def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, 
     (out / "validity.md").write_text(report.markdown(results, bench.levels), encoding="utf-8")
     (out / "validity.tex").write_text(report.latex(results), encoding="utf-8")
     figures = report.write_heatmap(results, out / "validity_tau")
+    mism: list[Any] = []
+    if mismatch and mm.speech_metrics(scored.result.setup):
+        t0 = time.perf_counter()
+        echo("Mismatch test: every condition scored again with a deranged segment's speech (same speaker)")
+        mism = mm.mismatch_test(scored, conditions, n_bootstrap=n_bootstrap, seed=seed, jobs=jobs, progress=progress)
+        mm.write_csv(mism, out / "mismatch.csv")
+        with open(out / "validity.md", "a", encoding="utf-8") as fh:
+            fh.write("\n## Mismatch test (own speech vs deranged speech)\n\n" + mm.markdown(mism))
+        figures.append(out / "mismatch.csv")
+        timings["mismatch_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - t_all
     (out / "validity.json").write_text(json.dumps({
         "corpus": str(pathlib.Path(corpus.root).resolve()), "split": split, "segments": [r.segment_id for r in requests],
@@ -120,7 +132,7 @@ def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, 
                                 "model": str(c.model_dir) if c.model_dir else None} for c in bench.conditions},
         "timings_s": {k: round(v, 2) for k, v in timings.items()}}, indent=1), encoding="utf-8")
     files = [out / f"validity.{e}" for e in ("csv", "md", "tex", "json")] + figures + [paths["summary_csv"]]
-    return ValidityRun(results, out, conditions, metrics, bench.families, timings, files)
+    return ValidityRun(results, out, conditions, metrics, bench.families, timings, files, mism)
 
 
 @click.command("validate-metrics")
@@ -144,11 +156,13 @@ def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, 
               help="Use this FGD encoder instead of training a small one on the train split.")
 @click.option("--fgd-epochs", type=click.IntRange(min=1), default=FGD_EPOCHS, show_default=True,
               help="Epochs of the small FGD encoder.")
+@click.option("--no-mismatch-test", "no_mismatch", is_flag=True, help="Skip the mismatch test (each speech metric "
+              "scored again with a deranged segment's speech; writes mismatch.csv).")
 @click.option("--quiet", is_flag=True, help="No progress bars and no table.")
 @on_mismatch_option
 def validate_metrics(corpus_dir: pathlib.Path, out_dir: pathlib.Path, split: str, models: tuple[str, ...],
                      bootstrap: int, seed: int, fps: float, jobs: int, no_fgd: bool, fgd_model: pathlib.Path | None,
-                     fgd_epochs: int, quiet: bool) -> None:
+                     fgd_epochs: int, no_mismatch: bool, quiet: bool) -> None:
     """Known-truth validity of every metric of `evalsuite score` on a synthetic-speaker corpus.
 
     Generates the oracle (the speaker's own model, another performance of the same speech) and graded
@@ -172,9 +186,15 @@ def validate_metrics(corpus_dir: pathlib.Path, out_dir: pathlib.Path, split: str
 
     run = run_validation(corpus_dir, out_dir, split=split, models=models, n_bootstrap=bootstrap, seed=seed, fps=fps,
                          jobs=jobs, fgd=not no_fgd, fgd_model=fgd_model, fgd_epochs=fgd_epochs, progress=not quiet,
-                         echo=echo)
+                         mismatch=not no_mismatch, echo=echo)
     echo("")
     echo(text_table(run.results))
     blind = speech_blind(run.results)
     echo("Blind to speech (offset 1.2 s within bootstrap noise): " + (", ".join(blind) if blind else "none"))
+    if run.mismatch:
+        from evalsuite.validity.mismatch import separation
+
+        sep = separation(run.mismatch)
+        echo("Mismatch test (oracle's loss from deranged speech minus the strongest offset's, 95 % interval): "
+             + "; ".join(f"{m} {d:+.3g} [{lo:.3g}, {hi:.3g}]" for m, (d, lo, hi) in sep.items()))
     echo(f"Wrote {', '.join(p.name for p in run.files)} to {run.out_dir} in {run.timings['total_s']:.0f} s")
