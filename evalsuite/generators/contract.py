@@ -135,10 +135,13 @@ class GenerationRequest:
 
 @dataclass
 class GenerationResult:
-    """A generated motion (an :class:`evalsuite.motion.Motion`, hierarchical or positional) and notes."""
+    """A generated motion (an :class:`evalsuite.motion.Motion`, hierarchical or positional) and notes; or, for
+    an SMPL-X source, ``smplx`` (an :class:`evalsuite.motion.smplx.SmplxData` of exactly the requested frames and
+    rate, written as SMPL-X ``.npz``) with ``motion`` None."""
 
     motion: Any
     meta: dict[str, Any] = field(default_factory=dict)
+    smplx: Any = None
 
 
 @dataclass

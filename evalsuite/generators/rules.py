@@ -10,6 +10,8 @@ plus notes of every change made to it, or raises :class:`GeneratorError` naming 
    noted as ``resampled``;
 5. length: ``round(duration * fps)`` frames; a result within ``max(1 frame, 2 %)`` is trimmed, or padded by
    holding the last frame, and noted; anything else is an error.
+
+An SMPL-X result (``GenerationResult.smplx``, from an SMPL-X source) is checked by :func:`conform_smplx`.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from evalsuite.generators.contract import GenerationRequest, GenerationResult, G
 from evalsuite.motion import Motion
 from evalsuite.motion.ops import resample
 
-__all__ = ["conform", "length_tolerance", "motion_digest"]
+__all__ = ["conform", "conform_smplx", "length_tolerance", "motion_digest"]
 
 
 def length_tolerance(n_frames: int) -> int:
@@ -106,3 +108,20 @@ def conform(spec: GeneratorSpec, req: GenerationRequest, result: Any) -> tuple[M
         motion = resample(motion, req.fps)
         # resampling keeps frames up to the last original frame's time; the length rule pads the rest
     return _fix_length(spec, req, motion, notes), notes
+
+
+def conform_smplx(spec: GeneratorSpec, req: GenerationRequest, data: Any, post: bool) -> Any:
+    """The rules for an SMPL-X result (:attr:`GenerationResult.smplx`): finite ``poses``/``trans``, the requested
+    frame rate and exactly ``req.n_frames`` frames (the SMPL-X operators fit them), no post-processing filter."""
+    if post:
+        raise _fail(spec, req, "post-processing filters work on BVH or positions motion, not on SMPL-X output")
+    for key in ("poses", "trans"):
+        bad = ~np.isfinite(np.asarray(getattr(data, key)))
+        if bad.any():
+            frame, col = (int(v) for v in np.argwhere(bad)[0])
+            raise _fail(spec, req, f"SMPL-X output has {int(bad.sum())} non-finite {key} values (first at frame "
+                                   f"{frame}, column {col}); every value must be a finite number")
+    if abs(data.fps - req.fps) > 1e-6 * req.fps or data.n_frames != req.n_frames:
+        raise _fail(spec, req, f"SMPL-X output has {data.n_frames} frames at {data.fps:g} fps, expected "
+                               f"{req.n_frames} at {req.fps:g} fps")
+    return data

@@ -20,15 +20,18 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
+
 from evalsuite.errors import InputError
 from evalsuite.generators.contract import GenerationRequest, Generator, GeneratorError
 from evalsuite.generators.provenance import describe_inputs, model_sha256, package_versions
 from evalsuite.generators.registry import GeneratorEntry, generator_class
-from evalsuite.generators.rules import conform, motion_digest
+from evalsuite.generators.rules import conform, conform_smplx, motion_digest
 from evalsuite.hashing import file_sha256
 from evalsuite.motion import Motion
 from evalsuite.motion.filters import smooth
 from evalsuite.motion.io import save_motion
+from evalsuite.motion.smplx import write_smplx
 
 __all__ = ["derive_seed", "expand_samples", "generate", "GenerationRun", "PostProcess", "apply_post",
            "GENERATION_FORMAT"]
@@ -91,10 +94,10 @@ def _loaded(target: str, config: Mapping[str, Any], model_dir: str | None) -> Ge
     return _LOADED[key]
 
 
-def _file_name(req: GenerationRequest, samples: int, motion: Motion) -> str:
-    """``<segment>[_<k>].bvh`` for rotations, ``.npz`` for positions."""
+def _file_name(req: GenerationRequest, samples: int, motion: Motion | None) -> str:
+    """``<segment>[_<k>].bvh`` for rotations, ``.npz`` for positions and SMPL-X (``motion`` None)."""
     stem = req.segment_id if samples == 1 else f"{req.segment_id}_{req.sample}"
-    return stem + (".bvh" if motion.is_hierarchical else ".npz")
+    return stem + (".bvh" if motion is not None and motion.is_hierarchical else ".npz")
 
 
 @dataclass(frozen=True)
@@ -107,13 +110,21 @@ class _Task:
     post: tuple[PostProcess, ...]
 
     def write(self, gen: Generator, req: GenerationRequest, result: Any, seconds: float) -> dict[str, Any]:
-        motion, notes = conform(gen.spec, req, result)
-        motion = apply_post(motion, self.post)
-        path = pathlib.Path(self.out_dir) / _file_name(req, self.samples, motion)
-        save_motion(motion, path)
+        notes: list[dict[str, Any]] = []
+        if getattr(result, "smplx", None) is not None:  # an SMPL-X source gives SMPL-X output
+            data = conform_smplx(gen.spec, req, result.smplx, bool(self.post))
+            path = pathlib.Path(self.out_dir) / (_file_name(req, self.samples, None))
+            write_smplx(path, data)
+            frames, fps = data.n_frames, data.fps
+        else:
+            motion, notes = conform(gen.spec, req, result)
+            motion = apply_post(motion, self.post)
+            path = pathlib.Path(self.out_dir) / _file_name(req, self.samples, motion)
+            save_motion(motion, path)
+            frames, fps = motion.n_frames, motion.fps
         meta = dict(getattr(result, "meta", {}) or {})
         return {"file": path.name, "segment": req.segment_id, "sample": req.sample, "seed": req.seed,
-                "frames": motion.n_frames, "fps": motion.fps, "sha256": file_sha256(path),
+                "frames": frames, "fps": fps, "sha256": file_sha256(path),
                 "runtime_s": round(seconds, 4), "notes": notes, "meta": meta}
 
     def describe(self, req: GenerationRequest) -> str:
@@ -215,9 +226,17 @@ def generate(entry: GeneratorEntry, requests: Sequence[GenerationRequest], out_d
     return GenerationRun(out, rows, False, record)
 
 
-def _check_determinism_pair(gen: Generator, req: GenerationRequest, a: Any, b: Any) -> None:
+def _same_output(a: Any, b: Any) -> bool:
+    sa, sb = getattr(a, "smplx", None), getattr(b, "smplx", None)
+    if sa is not None or sb is not None:
+        return (sa is not None and sb is not None and np.array_equal(sa.poses, sb.poses)
+                and np.array_equal(sa.trans, sb.trans))
     ma, mb = getattr(a, "motion", None), getattr(b, "motion", None)
-    if isinstance(ma, Motion) and isinstance(mb, Motion) and motion_digest(ma) != motion_digest(mb):
+    return not (isinstance(ma, Motion) and isinstance(mb, Motion)) or motion_digest(ma) == motion_digest(mb)
+
+
+def _check_determinism_pair(gen: Generator, req: GenerationRequest, a: Any, b: Any) -> None:
+    if not _same_output(a, b):
         raise GeneratorError(f"generator {gen.spec.name!r}, segment {req.segment_id!r}: two runs with the same "
                              f"inputs, config, model and seed ({req.seed}) gave different output; a plug-in must draw "
                              "all randomness from the request's seed")

@@ -1,13 +1,15 @@
 """``natural``, ``mean_pose`` and ``precomputed``: the conditions every study has."""
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from evalsuite.generators.conditions.source import OF_OPTION, fit_to_request, folder_files, source_motion
+from evalsuite.generators.conditions.smplx_ops import fit_smplx, mean_pose_smplx, smplx_source
+from evalsuite.generators.conditions.source import OF_OPTION, fit_to_request, folder_files, source_motion, source_path
 from evalsuite.generators.contract import (
     GenerationRequest,
     GenerationResult,
@@ -19,6 +21,7 @@ from evalsuite.hashing import file_sha256
 from evalsuite.motion import Motion
 from evalsuite.motion.io import list_motion_files, load_motion
 from evalsuite.motion.joint_rotations import rotation_joints
+from evalsuite.motion.smplx import SmplxData, is_smplx_npz, read_smplx
 
 __all__ = ["Natural", "MeanPose", "Precomputed", "mean_pose_of"]
 
@@ -32,6 +35,9 @@ class Natural(Generator):
                 "speech's duration; a motion shorter than the speech holds its last frame).")
 
     def generate(self, request: GenerationRequest) -> GenerationResult:
+        data = smplx_source(source_path("natural", request))
+        if data is not None:  # SMPL-X stays SMPL-X, every key as recorded
+            return GenerationResult(None, smplx=fit_smplx(data, request))
         return GenerationResult(fit_to_request(source_motion("natural", request), request))
 
 
@@ -62,7 +68,7 @@ class MeanPose(Generator):
         name="mean_pose", version="1", kind="condition", output="any",
         summary="The mean pose of the source motion held for the whole segment (zero velocity). The mean is over "
                 "the folder given by 'from' (e.g. the training split's motion) or else over the segments being "
-                "generated.",
+                "generated; on SMPL-X the per-joint rotation mean of the axis-angle, written as SMPL-X.",
         config={**OF_OPTION, "from": "a folder of motion files to average (default: the source motion of the "
                                      "segments being generated)"})
     batch_only = True
@@ -72,12 +78,12 @@ class MeanPose(Generator):
 
     def generate_batch(self, requests: Sequence[GenerationRequest]) -> list[GenerationResult]:
         src = self.option("from")
-        if src:
-            motions = [load_motion(p) for p in folder_files(src).values()]
-            if not motions:
-                raise GeneratorError(f"no motion files in {src}", field="from")
-        else:
-            motions = [source_motion(self.option("of"), r) for r in requests]
+        paths = list(folder_files(src).values()) if src else [source_path(self.option("of"), r) for r in requests]
+        if not paths:
+            raise GeneratorError(f"no motion files in {src}", field="from")
+        if all(is_smplx_npz(p) for p in paths):
+            return self._smplx(requests, [read_smplx(p) for p in paths])
+        motions = [load_motion(p) for p in paths]
         mean = mean_pose_of(motions)
         out = []
         for r in requests:
@@ -85,6 +91,24 @@ class MeanPose(Generator):
             m = mean.with_values(mean.values[idx], fps=r.fps) if mean.is_hierarchical else \
                 mean.with_positions(mean.positions()[idx], fps=r.fps)
             out.append(GenerationResult(m, {"averaged_files": len(motions)}))
+        return out
+
+    def _smplx(self, requests: Sequence[GenerationRequest], items: list[SmplxData]) -> list[GenerationResult]:
+        """SMPL-X: the per-joint rotation mean (and mean trans, expressions) held, with each segment's own keys."""
+        pose, trans, expr = mean_pose_smplx(items)
+        out = []
+        for r in requests:
+            try:
+                own = smplx_source(source_path(self.option("of"), r)) or items[0]
+            except GeneratorError:
+                own = items[0]
+            base = fit_smplx(own, r)
+            n = base.n_frames
+            keep = base.expressions is not None and expr is not None and base.expressions.shape[1] == expr.size
+            data = dataclasses.replace(base, poses=np.repeat(pose[None], n, axis=0), trans=np.repeat(trans[None], n, 0),
+                                       expressions=np.repeat(expr[None], n, 0) if keep and expr is not None
+                                       else base.expressions)
+            out.append(GenerationResult(None, {"averaged_files": len(items)}, smplx=data))
         return out
 
 

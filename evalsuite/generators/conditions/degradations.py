@@ -15,19 +15,26 @@ are left as they are):
   post-processing studied in "Moving fast and slow".
 
 Each applies to the source condition (``of``: natural by default, or any generator's output folder).
-Positions-only motion is refused by the rotation-based ones (their definitions are on rotations).
+Positions-only motion is refused by the rotation-based ones (their definitions are on rotations). An SMPL-X
+source (BEAT2 ``.npz``) is degraded exactly as ``make_synthetic_baseline.py`` does on its axis-angle ``poses``
+and written as SMPL-X with its other keys (:mod:`~evalsuite.generators.conditions.smplx_ops`: there the
+fluctuation has one phase per sample, and ``fixing`` draws its 18 joints among all 55, the root included).
 """
 from __future__ import annotations
 
 import abc
+import dataclasses
 from typing import Any, ClassVar
 
 import numpy as np
 
-from evalsuite.generators.conditions.source import OF_OPTION, fit_to_request, source_motion
+from evalsuite.generators.conditions import smplx_ops
+from evalsuite.generators.conditions.smplx_ops import fit_smplx, smplx_source
+from evalsuite.generators.conditions.source import OF_OPTION, fit_to_request, source_motion, source_path
 from evalsuite.generators.contract import GenerationRequest, GenerationResult, Generator, GeneratorSpec
 from evalsuite.motion import Motion
 from evalsuite.motion.filters import smooth
+from evalsuite.motion.io import load_motion
 from evalsuite.motion.joint_rotations import rotation_joints, rotation_vectors, with_rotation_vectors
 
 __all__ = ["GaussianNoise", "Attenuated", "Fluctuation", "Fixing", "Smoothed"]
@@ -47,8 +54,18 @@ class _Degradation(Generator):
     def degrade(self, rv: np.ndarray, motion: Motion, rng: np.random.Generator) -> np.ndarray:
         """The degraded rotation vectors ``(T, R, 3)``."""
 
+    @abc.abstractmethod
+    def degrade_smplx(self, poses: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The degraded SMPL-X ``poses`` ``(T, 165)``, as make_synthetic_baseline.py (see smplx_ops)."""
+
     def generate(self, request: GenerationRequest) -> GenerationResult:
-        motion = fit_to_request(source_motion(self.option("of"), request), request)
+        path = source_path(self.option("of"), request)
+        data = smplx_source(path)
+        if data is not None:  # SMPL-X: the Leaderboard's formula on the whole file's axis-angle, then the length
+            degraded = dataclasses.replace(data, poses=self.degrade_smplx(data.poses,
+                                                                          np.random.default_rng(request.seed)))
+            return GenerationResult(None, smplx=fit_smplx(degraded, request))
+        motion = fit_to_request(load_motion(path), request)
         rv = rotation_vectors(motion)
         out = self.degrade(rv, motion, np.random.default_rng(request.seed))
         return GenerationResult(with_rotation_vectors(motion, out))
@@ -67,6 +84,9 @@ class GaussianNoise(_Degradation):
     def degrade(self, rv: np.ndarray, motion: Motion, rng: np.random.Generator) -> np.ndarray:
         return rv + rng.normal(0.0, self.param("sigma"), size=rv.shape)
 
+    def degrade_smplx(self, poses: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return smplx_ops.gaussian_noise(poses, rng, self.param("sigma"))
+
 
 class Attenuated(_Degradation):
     spec = _spec("attenuated", "Rotations pulled 80 % of the way to the file's mean: (1-a) r + a mean(r).",
@@ -76,6 +96,9 @@ class Attenuated(_Degradation):
     def degrade(self, rv: np.ndarray, motion: Motion, rng: np.random.Generator) -> np.ndarray:
         a = self.param("alpha")
         return (1 - a) * rv + a * rv.mean(axis=0, keepdims=True)
+
+    def degrade_smplx(self, poses: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return smplx_ops.attenuated(poses, self.param("alpha"))
 
 
 def _root_rows(motion: Motion) -> list[int]:
@@ -96,6 +119,9 @@ class Fluctuation(_Degradation):
         wave[:, _root_rows(motion)] = 0.0
         return rv + wave
 
+    def degrade_smplx(self, poses: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return smplx_ops.fluctuation(poses, rng, self.param("amplitude"), self.param("frequency"))
+
 
 class Fixing(_Degradation):
     spec = _spec("fixing", "round(J*18/55) random non-root joints held at their frame-0 rotation.",
@@ -110,6 +136,9 @@ class Fixing(_Degradation):
         out = rv.copy()
         out[:, held] = rv[:1, held]
         return out
+
+    def degrade_smplx(self, poses: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return smplx_ops.fixing(poses, rng, int(round(poses.shape[1] // 3 * self.param("fraction"))))
 
 
 class Smoothed(Generator):

@@ -5,7 +5,9 @@ Segments are sorted by duration and the source motion is shifted cyclically by `
 ``make_synthetic_baseline.py`` (``human_mismatch``), ``s`` is drawn (seeded) among the shifts where every
 pair's durations differ by at most ``tolerance`` (default 20 %); when no shift qualifies, the shift with the
 least total duration difference is used. The borrowed motion is cropped to the segment's length; a shorter
-one is extended by playing it backwards and forwards (no jump), which is noted in the provenance.
+one is extended by playing it backwards and forwards (no jump), which is noted in the provenance. With SMPL-X
+sources the segment gets the donor's ``poses`` and ``trans`` and keeps its own other keys (``betas``,
+``expressions``, ...), as ``human_mismatch`` does, written as SMPL-X.
 """
 from __future__ import annotations
 
@@ -13,7 +15,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from evalsuite.generators.conditions.source import OF_OPTION, source_motion
+from evalsuite.generators.conditions.smplx_ops import fit_smplx, smplx_source, take_frames, with_motion
+from evalsuite.generators.conditions.source import OF_OPTION, source_path
 from evalsuite.generators.contract import (
     GenerationRequest,
     GenerationResult,
@@ -22,7 +25,9 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
 )
 from evalsuite.motion import Motion
+from evalsuite.motion.io import load_motion
 from evalsuite.motion.ops import resample
+from evalsuite.motion.smplx import SmplxData
 
 __all__ = ["Mismatched", "choose_shift", "ping_pong_indices"]
 
@@ -76,9 +81,25 @@ class Mismatched(Generator):
         for pos, i in enumerate(order):
             donor = order[(pos + shift) % len(order)]
             req = requests[i]
-            src: Motion = resample(source_motion(self.option("of"), requests[donor]), req.fps)
+            donor_path = source_path(self.option("of"), requests[donor])
+            donor_data = smplx_source(donor_path)
+            if donor_data is not None:  # SMPL-X: the donor's poses and trans, the segment's other keys
+                out[i] = GenerationResult(None, {"motion_from": requests[donor].segment_id,
+                                                 "extended_by_ping_pong": bool(donor_data.n_frames < req.n_frames)},
+                                          smplx=self._smplx(req, donor_data))
+                continue
+            src: Motion = resample(load_motion(donor_path), req.fps)
             idx = ping_pong_indices(src.n_frames, req.n_frames)
             m = src.with_values(src.values[idx]) if src.is_hierarchical else src.with_positions(src.positions()[idx])
             out[i] = GenerationResult(m, {"motion_from": requests[donor].segment_id,
                                           "extended_by_ping_pong": bool(src.n_frames < req.n_frames)})
         return [r for r in out if r is not None]
+
+    def _smplx(self, req: GenerationRequest, donor: SmplxData) -> SmplxData:
+        try:
+            own = smplx_source(source_path(self.option("of"), req)) or donor
+        except GeneratorError:  # no motion of its own: the donor's other keys too
+            own = donor
+        base = fit_smplx(own, req)
+        fit_smplx(donor, req)  # the same frame rate
+        return with_motion(base, take_frames(donor, ping_pong_indices(donor.n_frames, req.n_frames)))

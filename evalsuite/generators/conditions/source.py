@@ -17,7 +17,7 @@ from evalsuite.motion import Motion
 from evalsuite.motion.io import list_motion_files, load_motion
 from evalsuite.motion.ops import resample
 
-__all__ = ["OF_OPTION", "source_motion", "fit_to_request", "folder_files"]
+__all__ = ["OF_OPTION", "source_path", "source_motion", "fit_to_request", "folder_files"]
 
 OF_OPTION = {"of": "the source condition: 'natural' (default: the corpus's motion) or a folder of motion files "
                    "named by segment id"}
@@ -36,20 +36,25 @@ def folder_files(folder: str | pathlib.Path) -> dict[str, pathlib.Path]:
     return _FOLDERS[key]
 
 
-def source_motion(of: Any, req: GenerationRequest) -> Motion:
-    """The source condition's motion of the request's segment (sample ``req.sample`` where a folder has
+def source_path(of: Any, req: GenerationRequest) -> pathlib.Path:
+    """The source condition's motion file of the request's segment (sample ``req.sample`` where a folder has
     several samples per segment)."""
     if of in (None, "", "natural"):
         if req.segment is None or req.segment.motion is None:
             raise GeneratorError(f"segment {req.segment_id!r} has no natural motion (give --corpus with motion, "
                                  "or a source folder with the option 'of')")
-        return load_motion(req.segment.motion)
+        return pathlib.Path(req.segment.motion)
     files = folder_files(of)
     for stem in (f"{req.segment_id}_{req.sample}", req.segment_id):
         if stem in files:
-            return load_motion(files[stem])
+            return files[stem]
     raise GeneratorError(f"no motion file for segment {req.segment_id!r} in {of} "
                          f"(expected {req.segment_id}.bvh/.npz or {req.segment_id}_{req.sample}.*)", field="of")
+
+
+def source_motion(of: Any, req: GenerationRequest) -> Motion:
+    """The motion of :func:`source_path`."""
+    return load_motion(source_path(of, req))
 
 
 def fit_to_request(motion: Motion, req: GenerationRequest) -> Motion:
