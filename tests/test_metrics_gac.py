@@ -101,7 +101,7 @@ def test_frame_skip_grid_and_wrists_convention():
     np.testing.assert_array_equal(coverage(nat, PARENTS, NAMES, conv), ref.astype(bool))
     wrists = parse_gac("wrists:joints=r_hand;l_hand")
     grid = coverage(nat, PARENTS, NAMES, wrists)
-    # the hands' paths only: far fewer pixels than the skeleton's, and the root sits at the window's centre
+    # the hands' paths only: far fewer pixels than the skeleton's; their height kept, off the bottom row
     assert 0 < grid.sum() < coverage(nat, PARENTS, NAMES, GAC_CONVENTIONS["tonoli2024"]).sum()
     assert not grid[-1].any()
 

@@ -52,7 +52,8 @@ class GacConvention:
     """Where the body's origin sits across the window, as a share of the range: ``origin_x * range`` is added
     to the horizontal coordinate before drawing (authors: ``+100`` with range 200, i.e. 0.5, centred)."""
     origin_y: float = 0.0
-    """The same for the vertical coordinate (authors: 0, so all below the root is clamped to the bottom row)."""
+    """The same for the vertical coordinate (authors: 0, so all below the root joint's height is clamped to the
+    bottom row; GENEA 2023's root ``body_world`` is on the ground, so nothing is)."""
     frame_skip: int = 1
     """Draw every ``frame_skip``-th frame (the paper's results: 1; their function's default: 5)."""
     min_count: int = 1
@@ -65,7 +66,8 @@ class GacConvention:
 
 GAC_CONVENTIONS: dict[str, GacConvention] = {
     "tonoli2024": GacConvention(),
-    "wrists": GacConvention(name="wrists", joints="wrists", shape="paths", origin_y=0.5),
+    "wrists": GacConvention(name="wrists", joints="wrists", shape="paths", normalisation="root_ground",
+                            grid_step=2.0),
 }
 _KEYS = {"joints": "joints", "shape": "shape", "skip": "skip", "plane": "plane", "normalisation": "normalisation",
          "range": "grid_range", "step": "grid_step", "origin_x": "origin_x", "origin_y": "origin_y",
