@@ -1,6 +1,7 @@
 """``evalsuite study``: build session plans, serve a study, export its results."""
 from __future__ import annotations
 
+import math
 import os
 import pathlib
 import secrets
@@ -152,3 +153,119 @@ def export(study_file, db, instance, out, raw):
 def admin_token():
     """Print a fresh random admin token (pass it to `serve --admin-token`)."""
     click.echo(secrets.token_urlsafe(24))
+
+
+DESIGNS = ("pairwise", "mushra", "likert")
+
+
+@study.command()
+@click.argument("study_file", required=False, type=click.Path(exists=True, dir_okay=False))
+@click.option("--design", type=click.Choice(DESIGNS), default=None,
+              help="Without STUDY_FILE: the test to plan (pairwise: exact binomial; mushra: Wilcoxon signed-rank; "
+                   "likert: paired t-test, both by simulation).")
+@click.option("--comparisons", type=click.IntRange(1, 10_000), default=1, show_default=True,
+              help="Without STUDY_FILE: comparisons in the Holm family (planned at alpha / comparisons).")
+@click.option("--preference", type=click.FloatRange(0, 1), default=0.65, show_default=True,
+              help="Pairwise: the share of (non-tie) judgements expected for the better condition.")
+@click.option("--ties", type=click.FloatRange(0, 0.95), default=0.0, show_default=True,
+              help="Pairwise: the share of tie answers expected (left out of the test, so more judgements).")
+@click.option("--difference", type=click.FloatRange(0, 100, min_open=True), default=10.0, show_default=True,
+              help="MUSHRA: expected difference of two conditions, in rating points (0-100 scale).")
+@click.option("--sd", type=click.FloatRange(0, 100, min_open=True), default=20.0, show_default=True,
+              help="MUSHRA: standard deviation of one rating, in rating points.")
+@click.option("--likert-difference", type=click.FloatRange(0, 10, min_open=True), default=0.5, show_default=True,
+              help="Likert: expected difference of two conditions, in scale points.")
+@click.option("--likert-sd", type=click.FloatRange(0, 10, min_open=True), default=1.0, show_default=True,
+              help="Likert: standard deviation of one answer (and of a participant's offset), in scale points.")
+@click.option("--points", type=click.IntRange(2, 11), default=7, show_default=True,
+              help="Without STUDY_FILE, likert: points of the scale.")
+@click.option("--statements", type=click.IntRange(1, 50), default=1, show_default=True,
+              help="Without STUDY_FILE, likert: statements averaged into the scale score.")
+@click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05,
+              show_default=True, help="Significance level of the study (before Holm).")
+@click.option("--power", "target", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.8,
+              show_default=True, help="Power to reach for each comparison.")
+@click.option("--exclusion-rate", type=click.FloatRange(0, 0.95), default=0.0, show_default=True,
+              help="With STUDY_FILE: share of sessions expected to be excluded (more participants).")
+@click.option("--sims", type=click.IntRange(100, 100_000), default=1000, show_default=True,
+              help="Simulated studies per sample size (MUSHRA, Likert).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulations.")
+def power(study_file, design, comparisons, preference, ties, difference, sd, likert_difference, likert_sd,
+          points, statements, alpha, target, exclusion_rate, sims, seed):
+    """How many judgements or participants reach a stated power for a stated effect.
+
+    With STUDY_FILE: per rating block of the definition, the comparisons and Holm family, judgements per
+    comparison needed, what one session gives (from its plans), participants needed and the power of the
+    definition's `sessions`; the last line is the number of participants. Without it, for one --design: the
+    last line is the number of judgements (pairwise), pages (mushra) or participants (likert) per comparison.
+
+    \b
+    evalsuite study power --design pairwise --preference 0.65 --comparisons 10 --alpha 0.05 --power 0.8
+    evalsuite study power study.yaml --preference 0.65 --difference 8 --exclusion-rate 0.1
+    """
+    from evalsuite.analysis import power as pw
+    from study_app.planning import Effects
+
+    effects = Effects(preference=preference, ties=ties, difference=difference, sd=sd,
+                      likert_difference=likert_difference, likert_sd=likert_sd, alpha=alpha, power=target,
+                      exclusion_rate=exclusion_rate, sims=sims, seed=seed)
+    try:
+        if study_file:
+            if design:
+                raise click.UsageError("--design is for planning without a study definition; the definition "
+                                       "says its designs")
+            _power_of_study(study_file, effects)
+            return
+        if not design:
+            raise click.UsageError("give a STUDY_FILE, or --design pairwise|mushra|likert")
+        level = alpha / comparisons
+        click.echo(f"{design}: {comparisons} comparison(s), planned at Holm's strictest step alpha/K = {level:.4g}, "
+                   f"power {target:g}")
+        if design == "pairwise":
+            n, achieved = pw.pairwise_judgements(preference, alpha=alpha, power=target, comparisons=comparisons)
+            needed = math.ceil(n / (1 - ties))
+            click.echo(f"exact two-sided binomial test, preference {preference:g}: {n} judgements without ties "
+                       f"(power {achieved:.3f})" + (f", {needed} with {ties:g} ties" if ties else ""))
+            click.echo("judgements per comparison:")
+        elif design == "mushra":
+            needed, achieved = pw.smallest_n(lambda m: pw.mushra_power(m, difference, sd, level, sims=sims, seed=seed),
+                                             target)
+            click.echo(f"Wilcoxon signed-rank, difference {difference:g} points, SD {sd:g}: simulated power "
+                       f"{achieved:.3f} ({sims} studies, seed {seed})")
+            click.echo("pages rating both conditions, per comparison:")
+        else:
+            needed, achieved = pw.smallest_n(lambda m: pw.likert_power(
+                m, likert_difference, likert_sd, level, points=points, statements=statements, sims=sims, seed=seed),
+                target)
+            click.echo(f"paired t-test, difference {likert_difference:g} of {points} points, SD {likert_sd:g}, "
+                       f"{statements} statement(s): simulated power {achieved:.3f} ({sims} studies, seed {seed})")
+            click.echo("participants rating both conditions, per comparison:")
+        click.echo(str(needed))
+    except ValueError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+def _power_of_study(study_file, effects) -> None:
+    from study_app.definition import load_study
+    from study_app.design import build_plans
+    from study_app.planning import study_power
+
+    st = load_study(study_file)
+    rows = study_power(st, build_plans(st), effects)
+    if not rows:
+        raise click.ClickException("the study has no pairwise, mushra or likert block to plan")
+    click.echo(f"study {st.id!r}: alpha {effects.alpha:g}, power {effects.power:g}, {st.sessions} planned sessions"
+               + (f", {effects.exclusion_rate:g} expected to be excluded" if effects.exclusion_rate else ""))
+    for r in rows:
+        per = r["per_session"] * (1 - effects.exclusion_rate)
+        click.echo(f"  {r['block']} ({r['design']}, {r['effect']}): {len(r['pairs'])} comparison(s) x "
+                   f"{len(r['questions'])} {'scale' if r['design'] == 'likert' else 'question'}(s), family of "
+                   f"{r['family']}, level {r['level']:.4g}; needs {r['needed']} {r['unit']} per comparison, a "
+                   f"session gives {per:.3g} -> "
+                   + (f"{r['participants']} participants" if r["participants"] else "no session shows one")
+                   + f"; the planned sessions give {r['planned']:.0f} (power {r['achieved']:.2f})")
+    need = [r["participants"] for r in rows if r["participants"]]
+    if len(need) < len(rows):
+        raise click.ClickException("a comparison of the study is never shown (see above); fix the design first")
+    click.echo("participants needed (largest over the blocks):")
+    click.echo(str(max(need)))
