@@ -102,12 +102,13 @@ def _mean(values: list[Any]) -> float:
 
 
 def label_samples(result: Any, plan: Any, use: str, families: Iterable[Any]) -> None:
-    """Give every summary row its ``samples`` (how the metric used the samples: its ``MetricInfo.samples`` in
-    ``families`` where the metric fixes it, else ``use``) and ``n_samples`` (most samples of a sequence in the condition); with ``use ==
-    'each'``, replace each condition's rows by the mean over its sample indices (value and std; the confidence
-    interval of one sample index does not carry over, so ``ci_low``/``ci_high`` are left empty) and fold the
-    internal conditions of :func:`expand_for_each` back (per-sequence rows get a ``sample`` column). ``plan`` is
-    the plan before expansion; it becomes ``result.plan``."""
+    """Give every summary row its ``samples`` (how the metric used the samples: kept where the family's row
+    already says, else its ``MetricInfo.samples`` in ``families`` where the metric fixes it, else ``use``) and
+    ``n_samples`` (most samples of a sequence in the condition); with ``use == 'each'``, replace each
+    condition's rows by the mean over its sample indices (value and std; the confidence interval of one sample
+    index does not carry over, so ``ci_low``/``ci_high`` are left empty) and fold the internal conditions of
+    :func:`expand_for_each` back (per-sequence rows get a ``sample`` column). ``plan`` is the plan before
+    expansion; it becomes ``result.plan``."""
     uses = {m.name: m.samples for fam in families for m in fam.metrics if m.samples}
     internal = [c for c in result.plan.conditions if parent_condition(c) != c]
     counts = {c: max((len(v) for v in plan.samples.get(c, {}).values()), default=1) for c in plan.conditions}
