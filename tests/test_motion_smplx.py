@@ -162,3 +162,55 @@ def test_detection_looks_for_poses(tmp_path):
     with zipfile.ZipFile(tmp_path / "z.npz", "w") as zf:
         zf.writestr("poses.npy", b"")
     assert is_smplx_npz(tmp_path / "z.npz")
+
+
+def test_load_motion_gives_a_rotation_motion_with_the_recording(tmp_path):
+    from scipy.spatial.transform import Rotation
+
+    from evalsuite.motion import load_motion
+    from evalsuite.motion.motion import Motion
+    from evalsuite.motion.smplx_motion import SmplxMotion
+
+    path = write_fake_beat2_recording(tmp_path / "2_scott_0_1_1.npz", n_frames=20, fps=30)
+    motion = load_motion(path)
+    assert isinstance(motion, SmplxMotion) and motion.is_hierarchical
+    assert motion.joint_names == list(SMPLX_JOINT_NAMES) and list(motion.parents) == list(SMPLX_PARENTS)
+    assert (motion.fps, motion.n_frames, motion.name) == (30.0, 20, "2_scott_0_1_1")
+    assert np.array_equal(motion.smplx.poses, _arrays(path)["poses"])
+    exact = Rotation.from_rotvec(motion.smplx.poses.reshape(-1, 3)).as_matrix().reshape(20, 55, 3, 3)
+    assert np.allclose(motion.local_rotations(), exact, atol=1e-12)
+    assert np.allclose(Motion.local_rotations(motion), exact, atol=1e-9)   # the Euler channels agree
+    assert np.allclose(motion.values[:, :3], motion.smplx.trans)            # root channels: trans (no model)
+    summary = motion.summary()
+    assert summary["format"] == "smplx" and summary["betas"] == 300 and summary["gender"] == "neutral"
+    with pytest.raises(InputError, match="fps 25 was given but the file says 30"):
+        load_motion(path, fps=25)
+
+
+def test_operations_keep_the_smplx_recording(tmp_path):
+    from evalsuite.motion import load_motion, ops, save_motion
+    from evalsuite.motion.smplx_motion import SmplxMotion
+
+    path = write_fake_beat2_recording(tmp_path / "rec.npz", n_frames=60, fps=30)
+    motion = load_motion(path)
+    cut = ops.cut(motion, 0.5, 1.5)
+    assert isinstance(cut, SmplxMotion) and cut.n_frames == 30
+    assert np.allclose(cut.smplx.poses, motion.smplx.poses[15:45], atol=1e-9)
+    assert np.allclose(cut.smplx.trans, motion.smplx.trans[15:45], atol=1e-12)
+    assert cut.smplx.expressions is None
+    half = ops.resample(motion, 15)
+    assert isinstance(half, SmplxMotion) and half.fps == 15 and half.smplx.fps == 15
+    save_motion(cut, tmp_path / "cut.npz")
+    again = read_smplx(tmp_path / "cut.npz")
+    assert again.n_frames == 30 and again.fps == 30 and again.model == "smplx2020"
+    assert not isinstance(ops.select_joints(motion, "pelvis,spine1"), SmplxMotion)
+
+
+def test_positions_npz_still_loads_as_positions(tmp_path):
+    from evalsuite.motion import load_motion
+    from evalsuite.motion.smplx_motion import SmplxMotion
+
+    path = tmp_path / "pos.npz"
+    np.savez(path, positions=np.zeros((4, 2, 3)), joint_names=np.array(["a", "b"]), fps=np.float64(25))
+    motion = load_motion(path)
+    assert not isinstance(motion, SmplxMotion) and motion.joint_names == ["a", "b"] and motion.fps == 25

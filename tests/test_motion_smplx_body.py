@@ -153,3 +153,43 @@ def test_long_recordings_in_one_call(model, tmp_path):
     data = read_smplx(write_fake_beat2_recording(tmp_path / "rec.npz", n_frames=3000, seed=2))
     pos = smplx_positions(data, model, mode="leaderboard")
     assert pos.shape == (3000, 55, 3) and np.isfinite(pos).all()
+
+
+def test_smplx_motion_positions_offsets_and_bvh_round_trip(model, tmp_path, monkeypatch):
+    from evalsuite.motion import load_motion, save_motion
+    from evalsuite.motion.motion import Motion
+    from evalsuite.motion.smplx_motion import SmplxMotion
+
+    monkeypatch.delenv(MODEL_ENV, raising=False)
+    path = write_fake_beat2_recording(tmp_path / "rec.npz", n_frames=30, n_expr=0, seed=4)
+    motion = load_motion(path, smplx_model=model)
+    assert isinstance(motion, SmplxMotion) and motion.has_positions
+    want = smplx_positions(read_smplx(path), model)
+    assert np.abs(motion.positions() - want).max() < 1e-9
+    # the skeleton's OFFSETs are J(beta): plain BVH forward kinematics of the Euler channels gives the same
+    assert np.abs(Motion.positions(motion) - want).max() < 1e-9
+    save_motion(motion, tmp_path / "rec.bvh")
+    back = load_motion(tmp_path / "rec.bvh")
+    order = [back.joint_names.index(n) for n in motion.joint_names]   # BVH lists joints depth first
+    assert sorted(back.joint_names) == sorted(motion.joint_names) and back.fps == 30.0
+    assert np.abs(back.positions()[:, order] - want).max() < 1e-6
+    board = load_motion(path, smplx_model=model, positions="leaderboard")
+    save_motion(board, tmp_path / "board.bvh")
+    want_board = smplx_positions(read_smplx(path), model, mode="leaderboard")
+    assert np.abs(load_motion(tmp_path / "board.bvh").positions()[:, order] - want_board).max() < 1e-6
+
+
+def test_smplx_motion_without_a_model_has_rotations_but_no_positions(tmp_path, monkeypatch):
+    from evalsuite.motion import load_motion, save_motion
+
+    monkeypatch.delenv(MODEL_ENV, raising=False)
+    path = write_fake_beat2_recording(tmp_path / "rec.npz", n_frames=5)
+    motion = load_motion(path)
+    assert motion.local_rotations().shape == (5, 55, 3, 3)
+    for action in (motion.positions, lambda: save_motion(motion, tmp_path / "x.bvh"),
+                   lambda: save_motion(motion, tmp_path / "x.npy")):
+        with pytest.raises(SmplxModelMissing) as info:
+            action()
+        assert "\n" not in str(info.value) and "--smplx-model" in str(info.value)
+    assert not (tmp_path / "x.bvh").exists()
+    assert "need --smplx-model" in motion.summary()["positions"]

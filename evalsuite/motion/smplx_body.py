@@ -31,8 +31,8 @@ from evalsuite.errors import InputError
 from evalsuite.motion.smplx import SmplxData
 from evalsuite.motion.smplx_layout import JAW_EYES, N_JOINTS, SMPLX_PARENTS
 
-__all__ = ["MODEL_ENV", "REGISTER_URL", "MODES", "SmplxModelMissing", "resolve_model_path", "rest_joints",
-           "smplx_positions", "smplx_fk", "BodyModel", "load_body_model", "model_missing_message"]
+__all__ = ["MODEL_ENV", "REGISTER_URL", "MODES", "SmplxModelMissing", "resolve_model_path", "optional_model_path",
+           "rest_joints", "smplx_positions", "smplx_fk", "BodyModel", "load_body_model", "model_missing_message"]
 
 MODEL_ENV = "EVALSUITE_SMPLX_MODEL"
 REGISTER_URL = "https://smpl-x.is.tue.mpg.de"
@@ -64,6 +64,13 @@ def resolve_model_path(option: str | os.PathLike[str] | None, *, what: str = "th
         source = "--smplx-model" if option is not None else MODEL_ENV
         raise InputError(f"no such SMPL-X model file (from {source})", path=path)
     return path
+
+
+def optional_model_path(option: str | os.PathLike[str] | None) -> pathlib.Path | None:
+    """Like :func:`resolve_model_path`, but None when neither the option nor the environment names a file."""
+    if option is None and not os.environ.get(MODEL_ENV, "").strip():
+        return None
+    return resolve_model_path(option)
 
 
 @dataclass(frozen=True)
