@@ -84,10 +84,11 @@ def test_a_metric_that_takes_all_samples_is_labelled_all():
     family = SimpleNamespace(metrics=(MetricInfo("sample_div", samples="all"), MetricInfo("fd_g")))
     plan = SimpleNamespace(conditions=["natural", "sys"], samples={"sys": {"a": [1, 2, 3]}})
     result = SimpleNamespace(plan=plan, summary=[{"condition": "sys", "metric": "sample_div", "value": 1.0},
-                                                 {"condition": "sys", "metric": "fd_g", "value": 2.0}])
+                                                 {"condition": "sys", "metric": "fd_g", "value": 2.0},
+                                                 {"condition": "sys", "metric": "fgd", "value": 3.0, "samples": "all"}])
     label_samples(result, plan, "first", [family])
     assert [(r["metric"], r["samples"], r["n_samples"]) for r in result.summary] == [
-        ("sample_div", "all", 3), ("fd_g", "first", 3)]
+        ("sample_div", "all", 3), ("fd_g", "first", 3), ("fgd", "all", 3)]  # a family's own value is kept
 
 
 def test_score_samples_option_writes_the_column(folders, tmp_path):
