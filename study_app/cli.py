@@ -269,3 +269,43 @@ def _power_of_study(study_file, effects) -> None:
         raise click.ClickException("a comparison of the study is never shown (see above); fix the design first")
     click.echo("participants needed (largest over the blocks):")
     click.echo(str(max(need)))
+
+
+@study.command()
+@click.argument("study_file", type=click.Path(exists=True, dir_okay=False))
+@click.option("-o", "--out", type=click.Path(dir_okay=False), default=None,
+              help="Markdown file to write (default: <study id>.prereg.md beside the definition).")
+@click.option("--preset", type=click.Choice(["leaderboard", "mushra-itu"]), default=None,
+              help="The `evalsuite analyze --preset` the analysis will use (its settings go into the analysis plan).")
+@click.option("--preference", type=click.FloatRange(0, 1), default=0.65, show_default=True,
+              help="Pairwise effect for the sample-size rationale (see `study power`).")
+@click.option("--difference", type=click.FloatRange(0, 100, min_open=True), default=10.0, show_default=True,
+              help="MUSHRA effect in rating points for the sample-size rationale.")
+@click.option("--exclusion-rate", type=click.FloatRange(0, 0.95), default=0.0, show_default=True,
+              help="Share of sessions expected to be excluded, for the sample size.")
+@click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05,
+              show_default=True, help="Significance level of the analysis.")
+@click.option("--power", "target", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.8,
+              show_default=True, help="Power the sample size is planned for.")
+def prereg(study_file, out, preset, preference, difference, exclusion_rate, alpha, target):
+    """Write a pre-registration draft of STUDY_FILE (OSF Preregistration items, Markdown).
+
+    Design, randomisation, sample size and stopping rule, variables, exclusion criteria and the analysis plan
+    come from the definition, its plans, `study power` and `evalsuite analyze`'s settings; hypotheses, authors
+    and what else only the researcher knows are marked TO COMPLETE.
+    """
+    from evalsuite.analysis.pipeline import AnalysisOptions
+    from evalsuite.analysis.presets import preset_values
+    from study_app.definition import load_study
+    from study_app.design import build_plans
+    from study_app.planning import Effects
+    from study_app.prereg import prereg_markdown
+
+    st = load_study(study_file)
+    options = AnalysisOptions(alpha=alpha, preset=preset, **preset_values(preset))
+    effects = Effects(preference=preference, difference=difference, exclusion_rate=exclusion_rate, alpha=alpha,
+                      power=target)
+    text = prereg_markdown(st, build_plans(st), options, effects)
+    path = pathlib.Path(out) if out else st.path.with_name(f"{st.id}.prereg.md")
+    path.write_text(text, encoding="utf-8")
+    click.echo(f"pre-registration draft ({text.count('TO COMPLETE')} items to complete) -> {path}")
