@@ -108,6 +108,13 @@ def test_the_command_reports_the_mismatch_test(run):
     assert "## Mismatch test" in (out / "validity.md").read_text()
 
 
+@pytest.mark.slow
+def test_gesture_area_coverage_sees_attenuation_but_not_offsets(run):
+    _, _, table = run
+    assert table[("gac_dice", "amplitude")]["verdict"] == "correct"
+    assert table[("gac_dice", "offset")]["verdict"] == "blind"
+
+
 def test_tau_b_matches_scipy_including_ties():
     rng = np.random.default_rng(0)
     rows = np.vstack([rng.normal(size=(20, 5)), rng.integers(0, 3, size=(20, 5)).astype(float)])

@@ -83,7 +83,9 @@ def run_validation(corpus_dir: str | pathlib.Path, out_dir: str | pathlib.Path, 
     folders = plan.generate_conditions(bench, corpus, requests, out / "conditions", seed=seed, jobs=jobs,
                                        progress=progress, echo=echo)
     timings["generate_s"] = time.perf_counter() - t0
-    extra = []
+    from evalsuite.metrics.families.gac import GacFamily
+
+    extra: list[Any] = [GacFamily(default=True)]     # Gesture Area Coverage (tonoli2024), not in score's default set
     if fgd:
         t0 = time.perf_counter()
         extra.append(_fgd_family(corpus, out, pathlib.Path(fgd_model) if fgd_model else None, fgd_epochs, seed, echo))
