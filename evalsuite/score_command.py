@@ -12,6 +12,7 @@ import click
 
 from evalsuite.corpus.cli import on_mismatch_option
 from evalsuite.errors import InputError
+from evalsuite.motion.smplx_option import smplx_model_option
 
 
 def _fgd_family(model_path, raw: bool, n: int | None = None, infinity: bool = False):
@@ -84,6 +85,7 @@ def _fgd_family(model_path, raw: bool, n: int | None = None, infinity: bool = Fa
               "samples; metrics that take every sample at once say all).")
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
 @on_mismatch_option
+@smplx_model_option
 def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, corpus_dir, sigma, fps, resample, speed_bins,
           acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, fgd_n,
           fgd_inf, gac_spec, samples, quiet):

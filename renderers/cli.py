@@ -8,6 +8,7 @@ import warnings
 import click
 
 from evalsuite.errors import InputError
+from evalsuite.motion.smplx_option import smplx_model_option
 
 
 def _settings_options(fn):
@@ -42,7 +43,7 @@ def _settings_options(fn):
     ]
     for opt in reversed(options):
         fn = opt(fn)
-    return fn
+    return smplx_model_option(fn)   # SMPL-X motion is drawn from joint positions, which need the model file
 
 
 def _settings(kw):

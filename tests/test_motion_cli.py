@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import pathlib
 import subprocess
 import sys
 
@@ -136,3 +137,39 @@ def test_demo_motion_step_writes_positions(tmp_path):
     assert any("walk01.bvh: 19 joints, 101 frames @ 24 fps" in line for line in lines)
     with np.load(tmp_path / "demo" / "positions" / "walk01.npz") as data:
         assert data["positions"].shape == (101, 24, 3)
+
+
+def test_info_and_convert_on_smplx(tmp_path, monkeypatch):
+    sys.path.insert(0, str(pathlib.Path(__file__).parent))
+    from smplx_helpers import fake_smplx_model, write_fake_beat2_recording
+
+    from evalsuite.motion.io import load_motion
+    from evalsuite.motion.smplx import read_smplx
+    from evalsuite.motion.smplx_body import MODEL_ENV, smplx_positions
+
+    monkeypatch.setenv(MODEL_ENV, "")        # restored after the test (the option sets it)
+    rec = write_fake_beat2_recording(tmp_path / "2_scott_0_1_1.npz", n_frames=45, n_expr=0)
+    model = fake_smplx_model(tmp_path / "model.npz", n_betas=300, n_verts=80)
+    res = run("info", rec)
+    assert res.exit_code == 0, res.output
+    for text in ("smplx", "45", "1.500 s", "betas", "300", "neutral", "smplx2020",
+                 "need --smplx-model or EVALSUITE_SMPLX_MODEL"):
+        assert text in res.output
+    data = json.loads(run("info", rec, "--json", "--smplx-model", model).output)
+    assert data["format"] == "smplx" and data["positions"].startswith("available (full mode")
+    monkeypatch.setenv(MODEL_ENV, "")        # --smplx-model set it for the process
+    res = run("convert", rec, tmp_path / "x.bvh")
+    assert res.exit_code == 1 and "--smplx-model" in res.output and "smpl-x.is.tue.mpg.de" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    for mode in ("full", "leaderboard"):
+        res = run("convert", rec, tmp_path / f"{mode}.npy", "--smplx-model", model, "--positions", mode)
+        assert res.exit_code == 0, res.output
+        want = smplx_positions(read_smplx(rec), model, mode=mode)
+        got = np.load(tmp_path / f"{mode}.npy")
+        assert got.shape == (45, 55, 3) and np.abs(got - want).max() < 1e-12
+    assert run("convert", rec, tmp_path / "x.bvh", "--smplx-model", model).exit_code == 0
+    back = load_motion(tmp_path / "x.bvh")
+    order = [back.joint_names.index(n) for n in load_motion(rec).joint_names]
+    assert np.abs(back.positions()[:, order] - smplx_positions(read_smplx(rec), model)).max() < 1e-6
+    assert run("convert", rec, tmp_path / "cut.npz", "--start", "0.5").exit_code == 0
+    assert read_smplx(tmp_path / "cut.npz").n_frames == 30

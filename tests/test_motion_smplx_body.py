@@ -193,3 +193,19 @@ def test_smplx_motion_without_a_model_has_rotations_but_no_positions(tmp_path, m
         assert "\n" not in str(info.value) and "--smplx-model" in str(info.value)
     assert not (tmp_path / "x.bvh").exists()
     assert "need --smplx-model" in motion.summary()["positions"]
+
+
+@pytest.mark.parametrize("mode", ["full", "leaderboard"])
+def test_selected_joints_keep_the_positions_mode(model, tmp_path, monkeypatch, mode):
+    from evalsuite.motion import load_motion, ops
+
+    monkeypatch.delenv(MODEL_ENV, raising=False)
+    path = write_fake_beat2_recording(tmp_path / "rec.npz", n_frames=8, n_expr=0, seed=6)
+    names = ["pelvis", "spine1", "spine2", "spine3", "neck", "head", "jaw"]
+    part = ops.select_joints(load_motion(path, smplx_model=model, positions=mode), names)
+    want = smplx_positions(read_smplx(path), model, mode=mode)[:, [0, 3, 6, 9, 12, 15, 22]]
+    assert part.joint_names == names and np.abs(part.positions() - want).max() < 1e-9
+    assert np.abs(ops.cut(part, 0.0, 0.1).positions() - want[:3]).max() < 1e-9
+    bare = ops.select_joints(load_motion(path), names)
+    with pytest.raises(SmplxModelMissing):
+        bare.positions()

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import click
 
 from evalsuite.motion.fk import CONVENTIONS
+from evalsuite.motion.smplx_option import positions_mode_option, smplx_model_option
 
 _CONVENTION = click.option(
     "--convention", type=click.Choice(sorted(CONVENTIONS)), default="default", show_default=True,
@@ -19,13 +20,14 @@ if TYPE_CHECKING:
     from evalsuite.motion.motion import Motion
 
 
-def _load(path: str, fps: float | None, joints_file: str | None, convention: str | None) -> Motion:
+def _load(path: str, fps: float | None, joints_file: str | None, convention: str | None,
+          positions: str = "full") -> Motion:
     from evalsuite.motion.io import load_motion
 
     names = None
     if joints_file:
         names = [line.strip() for line in pathlib.Path(joints_file).read_text().splitlines() if line.strip()]
-    return load_motion(path, fps=fps, joint_names=names, convention=convention)
+    return load_motion(path, fps=fps, joint_names=names, convention=convention, positions=positions)
 
 
 @click.command()
@@ -36,9 +38,13 @@ def _load(path: str, fps: float | None, joints_file: str | None, convention: str
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
 @click.option("--joints/--no-joints", "list_joints", default=False, help="Also list every joint and its channels.")
 @_CONVENTION
+@smplx_model_option
 def info(files: tuple[str, ...], fps: float | None, joints_file: str | None, as_json: bool, list_joints: bool,
          convention: str | None) -> None:
-    """Summarise motion files: joints, channels, fps, frames, duration, a guess of the units."""
+    """Summarise motion files: joints, channels, fps, frames, duration, a guess of the units.
+
+    For SMPL-X files also the pose width, betas, expressions, gender, model and whether joint positions are
+    available (they need --smplx-model)."""
     out = []
     for path in files:
         motion = _load(path, fps, joints_file, convention)
@@ -50,9 +56,11 @@ def info(files: tuple[str, ...], fps: float | None, joints_file: str | None, as_
         out.append(summary)
         if not as_json:
             click.secho(path, bold=True)
-            labels = {"kind": "kind", "joints": "joints", "end_sites": "end sites", "channels": "channels",
-                      "frames": "frames", "fps": "fps", "duration_s": "duration", "roots": "roots",
-                      "units_guess": "units"}
+            labels = {"kind": "kind", "format": "format", "joints": "joints", "end_sites": "end sites",
+                      "channels": "channels", "frames": "frames", "fps": "fps", "duration_s": "duration",
+                      "roots": "roots", "units_guess": "units", "units": "units", "pose_width": "pose width",
+                      "betas": "betas", "expressions": "expression", "gender": "gender", "model": "model",
+                      "positions": "positions"}
             for key, label in labels.items():
                 value = summary.get(key)
                 if key == "duration_s":
@@ -90,18 +98,22 @@ def info(files: tuple[str, ...], fps: float | None, joints_file: str | None, as_
               help="Smoothing filter: moving average (5 frames), Savitzky-Golay (9, 3) or One-Euro.")
 @click.option("--end-sites", is_flag=True, help="Include End Sites in positions outputs (as <parent>_End).")
 @_CONVENTION
+@smplx_model_option
+@positions_mode_option
 def convert(src: str, dst: str, joints: str | None, start: float | None, end: float | None, fps: float | None,
             input_fps: float | None, joints_file: str | None, center_axes: str | None, smooth: str | None,
-            end_sites: bool, convention: str | None) -> None:
-    """Convert motion between BVH and positions (.npz, .npy, .csv), optionally cut in time.
+            end_sites: bool, convention: str | None, positions: str) -> None:
+    """Convert motion between BVH, SMPL-X and positions (.npz, .npy, .csv), optionally cut in time.
 
     Operations run in this order: cut (--start/--end), select joints, resample, center, smooth.
-    A .npz output holds positions (T, J, 3), joint_names, fps and parents.
+    A .npz output holds positions (T, J, 3), joint_names, fps and parents; from an SMPL-X input it is an
+    SMPL-X .npz again. SMPL-X to .bvh (J(beta) OFFSETs, metres) or to positions (T, 55, 3 in metres, in the
+    --positions mode) needs --smplx-model.
     """
     from evalsuite.motion import filters, ops
     from evalsuite.motion.io import save_motion
 
-    motion = _load(src, input_fps, joints_file, convention)
+    motion = _load(src, input_fps, joints_file, convention, positions)
     if start is not None or end is not None:
         motion = ops.cut(motion, 0.0 if start is None else start, end, past_end=False)
     if joints:

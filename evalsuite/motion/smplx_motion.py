@@ -28,7 +28,7 @@ from evalsuite.motion.smplx import SmplxData
 from evalsuite.motion.smplx_body import MODES, SmplxModelMissing, model_missing_message, rest_joints, smplx_positions
 from evalsuite.motion.smplx_layout import JAW_EYES, N_JOINTS, SMPLX_JOINT_NAMES, SMPLX_PARENTS
 
-__all__ = ["SmplxMotion", "smplx_skeleton", "EULER_ORDER"]
+__all__ = ["SmplxMotion", "SmplxJointsMotion", "smplx_skeleton", "EULER_ORDER"]
 
 EULER_ORDER = "ZXY"
 ROOT_CHANNELS = ("Xposition", "Yposition", "Zposition") + tuple(f"{a}rotation" for a in EULER_ORDER)
@@ -117,7 +117,7 @@ class SmplxMotion(Motion):
     def positions(self, end_sites: bool = False) -> np.ndarray:
         """Joint positions (T, 55, 3) in metres (needs the model file; SMPL-X has no End Sites)."""
         if self.smplx_model is None:
-            raise SmplxModelMissing(model_missing_message(f"{self.name or 'this SMPL-X motion'!s}: positions"))
+            raise SmplxModelMissing(model_missing_message(repr(self.name) if self.name else 'this SMPL-X motion'))
         if end_sites:
             raise InputError("SMPL-X motion has no End Sites", field="end_sites")
         key = ("positions", False)
@@ -140,8 +140,8 @@ class SmplxMotion(Motion):
         :class:`Motion` when the skeleton changes (joints selected). Expressions are kept when the frame count
         is unchanged and dropped otherwise."""
         if skeleton is not None and skeleton != self.skeleton:
-            return Motion(skeleton, values, fps or self.fps, root_offset=self.root_offset,
-                          joint_translation=self.joint_translation, name=self.name, source=self.source)
+            return SmplxJointsMotion(skeleton, values, fps or self.fps, has_model=self.has_positions,
+                                     position_mode=self.position_mode, name=self.name, source=self.source)
         values = np.asarray(values, dtype=np.float64)
         expr = self.smplx.expressions
         data = dataclasses.replace(
@@ -151,7 +151,7 @@ class SmplxMotion(Motion):
                            betas=self.position_betas, name=self.name, source=self.source)
 
     def summary(self) -> dict[str, Any]:
-        """What ``evalsuite info`` prints for an SMPL-X file."""
+        """What ``evalsuite info`` prints for an SMPL-X file (no positions are computed)."""
         d = self.smplx
         return {
             "name": self.name, "source": self.source, "kind": "SMPL-X (axis-angle rotations)",
@@ -168,3 +168,36 @@ class SmplxMotion(Motion):
     def __repr__(self) -> str:
         return (f"SmplxMotion(55 joints, {self.n_frames} frames @ {self.fps:g} fps"
                 + (f", {self.name!r}" if self.name else "") + ")")
+
+
+class SmplxJointsMotion(Motion):
+    """Some joints of an SMPL-X motion (:func:`evalsuite.motion.ops.select_joints` keeping a closed set): the
+    Euler channels of those joints, positions by forward kinematics of their J(β) OFFSETs (expressions not
+    applied). Without a model file, :meth:`positions` is the one-line missing-model error (the OFFSETs are
+    zero); in ``leaderboard`` mode the pelvis, jaw and eye rotations are zeroed and the pelvis stays at rest."""
+
+    def __init__(self, skeleton: Skeleton, values: np.ndarray, fps: float, *, has_model: bool,
+                 position_mode: str = "full", name: str | None = None, source: str | None = None) -> None:
+        values = np.array(values, dtype=np.float64)
+        if position_mode == "leaderboard":
+            starts = skeleton.channel_starts
+            for j, joint in enumerate(skeleton.names):
+                if joint in ("pelvis",) + tuple(SMPLX_JOINT_NAMES[k] for k in JAW_EYES):
+                    for c, channel in enumerate(skeleton.channels[j]):
+                        col = int(starts[j]) + c
+                        values[:, col] = skeleton.offsets[j]["XYZ".index(channel[0])] \
+                            if channel.endswith("position") else 0.0
+        super().__init__(skeleton, values, fps, root_offset="ignore", joint_translation="replace", name=name,
+                         source=source)
+        self.has_model = has_model
+        self.position_mode = position_mode
+
+    def positions(self, end_sites: bool = False) -> np.ndarray:
+        if not self.has_model:
+            raise SmplxModelMissing(model_missing_message(repr(self.name) if self.name else 'this SMPL-X motion'))
+        return super().positions(end_sites)
+
+    def with_values(self, values: np.ndarray, fps: float | None = None,
+                    skeleton: Skeleton | None = None) -> Motion:
+        return SmplxJointsMotion(skeleton or self.skeleton, values, fps or self.fps, has_model=self.has_model,
+                                 position_mode=self.position_mode, name=self.name, source=self.source)
