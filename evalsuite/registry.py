@@ -11,6 +11,7 @@ generators             ``evalsuite.generators``         a ``Generator`` subclass
 corpus layouts         ``evalsuite.corpus_layouts``     a ``Layout``, or a ``@register_layout`` function
 transcript formats     ``evalsuite.transcript_formats`` a ``TranscriptFormat``
 feature recipes        ``evalsuite.feature_recipes``    a ``Recipe``
+motion formats         ``evalsuite.motion_formats``     a ``MotionFormat``
 =====================  ===============================  ==================================================
 
 A :class:`Registry` maps a name to an item and is a read-only ``Mapping``:
