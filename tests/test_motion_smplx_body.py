@@ -149,10 +149,20 @@ def test_wrong_model_files_are_refused(tmp_path):
         rest_joints(good, np.zeros(300))
 
 
-def test_long_recordings_in_one_call(model, tmp_path):
+def test_long_recordings_in_blocks(model, tmp_path):
+    from evalsuite.motion.smplx_body import smplx_fk
+
     data = read_smplx(write_fake_beat2_recording(tmp_path / "rec.npz", n_frames=3000, seed=2))
     pos = smplx_positions(data, model, mode="leaderboard")
     assert pos.shape == (3000, 55, 3) and np.isfinite(pos).all()
+    rest = rest_joints(model, data.betas)
+    per_frame = rest + np.random.default_rng(0).normal(0.0, 0.01, (3000, 55, 3))
+    for r in (rest, per_frame):
+        whole = smplx_fk(data.rotvecs, r, data.trans, block_frames=4096)
+        assert np.array_equal(whole, smplx_fk(data.rotvecs, r, data.trans, block_frames=7))
+    t = 1234
+    want = _reference_frame(data.rotvecs[t], per_frame[t], data.trans[t])
+    assert np.abs(smplx_fk(data.rotvecs, per_frame, data.trans, block_frames=100)[t] - want).max() < 1e-9
 
 
 def test_smplx_motion_positions_offsets_and_bvh_round_trip(model, tmp_path, monkeypatch):

@@ -211,27 +211,45 @@ def _expression_joints(model: BodyModel, n_expr: int) -> np.ndarray:
     return _EXPR[key]
 
 
-def smplx_fk(rotvecs: np.ndarray, rest: np.ndarray, trans: np.ndarray | None = None) -> np.ndarray:
+# Frames computed together: (55, 3, 3, block) temporaries stay small, and frames-last arrays make the 3x3
+# products long vector operations (several times faster than batched small matmuls).
+BLOCK_FRAMES = 4096
+_HAS_CHILDREN = frozenset(p for p in SMPLX_PARENTS if p >= 0)
+
+
+def smplx_fk(rotvecs: np.ndarray, rest: np.ndarray, trans: np.ndarray | None = None, *,
+             block_frames: int = BLOCK_FRAMES) -> np.ndarray:
     """Joint positions (T, 55, 3) from axis-angle ``rotvecs`` (T, 55, 3), rest joints ``rest`` (55, 3) or
-    (T, 55, 3) and ``trans`` (T, 3): the chain of the module docstring, vectorised over frames."""
+    (T, 55, 3) and ``trans`` (T, 3): the chain of the module docstring, vectorised over frames (in blocks of
+    ``block_frames``; results do not depend on it)."""
     from scipy.spatial.transform import Rotation
 
+    rotvecs = np.asarray(rotvecs, dtype=np.float64).reshape(len(rotvecs), N_JOINTS, 3)
+    rest = np.asarray(rest, dtype=np.float64)
     n = len(rotvecs)
-    rot = Rotation.from_rotvec(np.asarray(rotvecs, dtype=np.float64).reshape(-1, 3)).as_matrix()
-    rot = rot.reshape(n, N_JOINTS, 3, 3)
-    rest = np.broadcast_to(np.asarray(rest, dtype=np.float64), (n, N_JOINTS, 3))
-    world = np.empty_like(rot)
-    pos = np.empty((n, N_JOINTS, 3))
-    for j, p in enumerate(SMPLX_PARENTS):
-        if p < 0:
-            world[:, j] = rot[:, j]
-            pos[:, j] = rest[:, j]
-        else:
-            world[:, j] = world[:, p] @ rot[:, j]
-            pos[:, j] = pos[:, p] + np.einsum("tab,tb->ta", world[:, p], rest[:, j] - rest[:, p])
+    out = np.empty((n, N_JOINTS, 3))
+    for start in range(0, n, block_frames):
+        stop = min(n, start + block_frames)
+        mats = Rotation.from_rotvec(rotvecs[start:stop].reshape(-1, 3)).as_matrix()
+        mats = np.ascontiguousarray(mats.reshape(stop - start, N_JOINTS, 3, 3).transpose(1, 2, 3, 0))
+        per_frame = rest.ndim == 3
+        r = np.ascontiguousarray(rest[start:stop].transpose(1, 2, 0)) if per_frame else rest   # (55, 3[, B])
+        world = np.empty_like(mats)                          # (55, 3, 3, B)
+        pos = np.empty((N_JOINTS, 3, stop - start))
+        for j, p in enumerate(SMPLX_PARENTS):
+            if p < 0:
+                world[j] = mats[j]
+                pos[j] = r[j] if per_frame else r[j][:, None]
+                continue
+            offset = r[j] - r[p]
+            pos[j] = pos[p] + (np.einsum("ijt,jt->it", world[p], offset) if per_frame
+                               else np.einsum("ijt,j->it", world[p], offset))
+            if j in _HAS_CHILDREN:
+                world[j] = np.einsum("ijt,jkt->ikt", world[p], mats[j])
+        out[start:stop] = pos.transpose(2, 0, 1)
     if trans is not None:
-        pos += np.asarray(trans, dtype=np.float64)[:, None, :]
-    return pos
+        out += np.asarray(trans, dtype=np.float64)[:, None, :]
+    return out
 
 
 def smplx_positions(data: SmplxData, model_path: str | os.PathLike[str] | None, *, mode: str = "full",
