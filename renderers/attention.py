@@ -42,11 +42,12 @@ def distort_frame(frame: np.ndarray, rng: np.random.Generator, block: int) -> np
 
 
 def make_attention_check(src, out, check: str, *, text: str | None = None, appear_s: float = 3.0,
-                         seed: int = 0, crf: int = 20) -> dict:
+                         seed: int = 0, crf: int = 20, bitrate: str | None = None) -> dict:
     """Write an attention-check version of video ``src`` to ``out``; returns its info.
 
     The frame count, frame rate and audio length are those of ``src``. For ``instruction``
-    the overlay appears at ``appear_s`` seconds, or at 40% of a shorter clip.
+    the overlay appears at ``appear_s`` seconds, or at 40% of a shorter clip. ``bitrate``: constant-bitrate
+    encoding instead of ``crf``.
     """
     if check not in CHECKS:
         raise InputError(f"unknown attention check {check!r}; expected one of {', '.join(CHECKS)}", field="check")
@@ -74,7 +75,7 @@ def make_attention_check(src, out, check: str, *, text: str | None = None, appea
     overlay = Overlay(text or DEFAULT_TEXT, w, h) if check == "instruction" else None
     block = max(8, w // 24)
     n = 0
-    with VideoWriter(out, w, h, fps, audio=audio, crf=crf) as writer:
+    with VideoWriter(out, w, h, fps, audio=audio, crf=crf, bitrate=bitrate) as writer:
         for i, frame in enumerate(_chain(first, frames)):
             if check == "distorted_video":
                 frame = distort_frame(frame, rng, block)

@@ -175,7 +175,13 @@ def still(motions, out, frame, time_s, captions, layout, cols, start, end, **kw)
 @click.option("--dask", "dask_address", default=None, metavar="ADDRESS",
               help="Scheduler address of an existing dask.distributed cluster (e.g. tcp://host:8786).")
 @click.option("--force", is_flag=True, help="Re-render even videos that are up to date.")
-def stimuli(config, jobs, dask_address, force):
+@click.option("--equal-size", type=click.Choice(["off", "pad", "cbr"]), default=None,
+              help="Make the videos of each segment equally large, so a file's size tells nothing: pad them with a "
+                   "box players ignore, or encode at a constant bitrate and pad the rest (default: the config's "
+                   "equal_size, else off).")
+@click.option("--bitrate", default=None, metavar="RATE",
+              help="Bitrate of --equal-size cbr, e.g. 400k (default: the config's bitrate, else 400k).")
+def stimuli(config, jobs, dask_address, force, equal_size, bitrate):
     """Render every condition x segment of CONFIG, plus attention checks, with blinded names.
 
     Writes the videos and a private manifest.csv (file -> condition, segment, kind,
@@ -183,10 +189,14 @@ def stimuli(config, jobs, dask_address, force):
     settings did not change since the last run are skipped. See docs/render.md.
     """
     from renderers.stimuli import build_stimuli
+    from renderers.stimuli_config import BITRATE_RE
 
     if jobs < 1:
         raise InputError("--jobs must be at least 1")
-    result = build_stimuli(config, jobs=jobs, dask_address=dask_address, force=force, echo=click.echo)
+    if bitrate is not None and not BITRATE_RE.match(bitrate):
+        raise InputError(f"expected a bitrate such as 400k or 1.5M, got {bitrate!r}", field="--bitrate")
+    result = build_stimuli(config, jobs=jobs, dask_address=dask_address, force=force, echo=click.echo,
+                           equal_size=equal_size, bitrate=bitrate)
     click.echo(f"{result['rendered']} rendered, {result['skipped']} up to date; manifest: {result['manifest']}")
 
 

@@ -76,6 +76,8 @@ def run(out_dir: pathlib.Path, echo) -> None:
         "start": 0.0,
         "end": seconds,
         "render": {"width": 192, "height": 144, "fps": 30.0, "framing": "full"},
+        "equal_size": "cbr",      # a file's size must not tell a participant which condition it shows
+        "bitrate": "300k",
         "attention_checks": [
             {"check": "instruction", "segment": segments[0], "condition": names[0],
              "text": "Attention: please rate this video 73", "expected": "73", "appear_s": 1.0},

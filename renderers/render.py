@@ -98,7 +98,7 @@ def _meshes(motions, settings, view):
 def render_video(motions, out, settings: RenderSettings | None = None, *, audio=None, captions=None,
                  layout: str = "side", cols: int | None = None, view: View | None = None,
                  frame_filter=None, progress: bool = False, label: str = "", start: float | None = None,
-                 end: float | None = None) -> dict:
+                 end: float | None = None, bitrate: str | None = None) -> dict:
     """Render one or more motions (already at one fps) into an H.264 MP4.
 
     Args:
@@ -113,6 +113,7 @@ def render_video(motions, out, settings: RenderSettings | None = None, *, audio=
         frame_filter: ``f(index, frame) -> frame`` applied to every composed frame.
         start, end: the window (seconds) of the source the motions show, so the audio is cut
             with them; default: the cut :func:`prepare_motions` recorded, else all of it.
+        bitrate: constant-bitrate encoding (e.g. ``"400k"``) instead of ``settings.crf``.
 
     Returns:
         dict with ``n_frames``, ``fps``, ``width``, ``height``, ``duration`` and ``view``.
@@ -137,7 +138,8 @@ def render_video(motions, out, settings: RenderSettings | None = None, *, audio=
     comp = Compositor(len(motions), settings.width, settings.height, layout=layout, cols=cols, captions=captions)
     meshes = _meshes(motions, settings, view)
     with FigureRenderer(view, settings) as renderer, \
-            VideoWriter(out, comp.width, comp.height, fps, audio=audio_data, crf=settings.crf) as writer:
+            VideoWriter(out, comp.width, comp.height, fps, audio=audio_data, crf=settings.crf,
+                        bitrate=bitrate) as writer:
         streams = [renderer.frames(mesh, pos[:n]) for mesh, pos in zip(meshes, positions)]
         for i, panels in enumerate(tqdm(zip(*streams), total=n, disable=not progress, unit="frame",
                                         desc=label or pathlib.Path(out).name, leave=False)):

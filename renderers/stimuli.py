@@ -16,6 +16,8 @@ A YAML (or JSON) config says what to render (paths relative to the config file):
          text: "Attention: please rate this video 73", expected: "73", appear_s: 3}
       - {check: distorted_audio, segment: seg02, condition: baseline, expected: bad}
       - {check: distorted_video, segment: seg01, condition: baseline}
+    equal_size: cbr                      # optional: off (default), pad, or cbr (constant bitrate, then pad)
+    bitrate: 400k                        # the bitrate of equal_size: cbr
 
 Output names are blinded: ``v`` + 12 hex digits of an HMAC of the condition, segment and
 check under a secret key kept in ``<output>/.blinding-key`` (created on first run), so
@@ -26,6 +28,10 @@ A video is re-rendered only when its *input hash* changed: a SHA-256 over the mo
 audio file contents, the render settings, the segment's shared camera, the cut and the
 renderer version, as recorded in the previous manifest (and the file's own SHA-256 still
 matches).
+
+``equal_size`` makes a file's size reveal nothing (:mod:`renderers.filesize`): ``pad`` brings the videos of each
+segment (its stimuli and attention checks, what one study page shows) to one size with a trailing ``free``
+box; ``cbr`` encodes at a constant ``bitrate`` first, so the padding stays small.
 """
 from __future__ import annotations
 
@@ -44,6 +50,7 @@ from evalsuite.contracts import manifest as manifest_contract
 from evalsuite.errors import InputError
 from evalsuite.hashing import file_sha256
 from evalsuite.parallel import run
+from renderers.filesize import pad_group
 from renderers.stimuli_config import load_config
 
 # Part of every input hash: bump it when a change to the renderer changes how videos look.
@@ -93,6 +100,7 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
 
     settings = cfg["settings"]
     out = cfg["output"]
+    bitrate = cfg.get("bitrate") if cfg.get("equal_size") == "cbr" else None
     key = blinding_key(out)
     conds = list(cfg["conditions"])
     render_jobs, by_pair = [], {}
@@ -111,10 +119,11 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
             file = blinded_name(key, conds, "stimulus", c, seg)
             spec = {"kind": "render", "file": file, "out": str(out / file), "condition": c, "segment": seg,
                     "motion": str(paths[c]), "audio": str(audio) if audio else None,
-                    "start": opts["start"], "end": opts["end"], "settings": settings.to_dict(), "view": view}
+                    "start": opts["start"], "end": opts["end"], "settings": settings.to_dict(), "view": view,
+                    "bitrate": bitrate}
             spec["input_hash"] = _hash({"v": RENDERER_VERSION, "motion": file_sha256(paths[c]), "audio": audio_hash,
                                         "settings": spec["settings"], "view": view, "start": spec["start"],
-                                        "end": spec["end"]})
+                                        "end": spec["end"], **({"bitrate": bitrate} if bitrate else {})})
             render_jobs.append(spec)
             by_pair[(c, seg)] = spec
     attention_jobs = []
@@ -125,9 +134,10 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
         spec = {"kind": "attention", "file": file, "out": str(out / file), "src": src["out"],
                 "source_file": src["file"], "condition": chk["condition"], "segment": chk["segment"],
                 "check": chk["check"], "text": chk["text"], "expected": chk["expected"],
-                "appear_s": chk["appear_s"], "seed": chk["index"], "crf": settings.crf}
+                "appear_s": chk["appear_s"], "seed": chk["index"], "crf": settings.crf, "bitrate": bitrate}
         spec["input_hash"] = _hash({"v": RENDERER_VERSION, "src": src["input_hash"], "check": chk["check"],
-                                    "text": chk["text"], "appear_s": chk["appear_s"], "seed": chk["index"]})
+                                    "text": chk["text"], "appear_s": chk["appear_s"], "seed": chk["index"],
+                                    **({"bitrate": bitrate} if bitrate else {})})
         attention_jobs.append(spec)
     return render_jobs, attention_jobs
 
@@ -147,13 +157,15 @@ def run_job(spec: dict) -> dict:
             settings = RenderSettings.from_dict(spec["settings"])
             motions = prepare_motions([spec["motion"]], settings, spec["start"], spec["end"])
             info = render_video(motions, spec["out"], settings, audio=spec["audio"],
-                                view=View.from_dict(spec["view"]), label=f"{spec['condition']}/{spec['segment']}")
+                                view=View.from_dict(spec["view"]), label=f"{spec['condition']}/{spec['segment']}",
+                                bitrate=spec.get("bitrate"))
             info.pop("view")
         else:
             from renderers.attention import make_attention_check
 
             info = make_attention_check(spec["src"], spec["out"], spec["check"], text=spec["text"] or None,
-                                        appear_s=spec["appear_s"], seed=spec["seed"], crf=spec["crf"])
+                                        appear_s=spec["appear_s"], seed=spec["seed"], crf=spec["crf"],
+                                        bitrate=spec.get("bitrate"))
     info["sha256"] = file_sha256(spec["out"])
     info["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     return info
@@ -204,12 +216,14 @@ def _describe_spec(spec: dict) -> str:
 
 
 def build_stimuli(config, *, jobs: int = 1, dask_address: str | None = None, force: bool = False,
-                  echo=print) -> dict:
+                  echo=print, equal_size: str | None = None, bitrate: str | None = None) -> dict:
     """Render every condition x segment and the attention checks of ``config``; write the manifest.
+    ``equal_size`` and ``bitrate`` override the config's keys of those names.
 
     Returns ``{"manifest": path, "rendered": n, "skipped": n, "rows": [...]}``.
     """
     cfg = load_config(config)
+    cfg.update({k: v for k, v in (("equal_size", equal_size), ("bitrate", bitrate)) if v is not None})
     render_jobs, attention_jobs = plan(cfg)
     manifest = cfg["output"] / "manifest.csv"
     old = {} if force else read_manifest(manifest)
@@ -238,5 +252,20 @@ def build_stimuli(config, *, jobs: int = 1, dask_address: str | None = None, for
         run(run_job, todo, jobs=jobs, dask_address=dask_address, desc=phase, unit="video", consume=done,
             describe=_describe_spec)
     ordered = [rows[s["file"]] for s in render_jobs + attention_jobs]
+    if cfg["equal_size"] != "off":
+        _equal_sizes(cfg["output"], ordered, echo)
     write_manifest(manifest, ordered)
     return {"manifest": manifest, "rendered": rendered, "skipped": skipped, "rows": ordered}
+
+
+def _equal_sizes(output: pathlib.Path, rows: list[dict], echo) -> None:
+    """Pad the files of each segment (its stimuli and attention checks: what one study page shows) to one size
+    (:func:`renderers.filesize.pad_group`) and record their new SHA-256 in ``rows``."""
+    by_segment: dict[str, list[dict]] = {}
+    for r in rows:
+        by_segment.setdefault(r["segment"], []).append(r)
+    for seg, group in by_segment.items():
+        size = pad_group(output / r["file"] for r in group)
+        for r in group:
+            r["sha256"] = file_sha256(output / r["file"])
+        echo(f"  segment {seg}: {len(group)} videos padded to {size:,} bytes each")

@@ -11,6 +11,11 @@ from evalsuite.errors import InputError
 from renderers.attention import CHECKS, DEFAULT_TEXT
 
 DEFAULT_EXPECTED = {"instruction": "73", "distorted_audio": "bad", "distorted_video": "bad"}
+# Stimulus files of one segment made equally large (renderers.filesize): not at all, padded, or
+# constant-bitrate encoded and padded; the bitrate of "cbr".
+EQUAL_SIZE = ("off", "pad", "cbr")
+DEFAULT_BITRATE = "400k"
+BITRATE_RE = re.compile(r"^[1-9][0-9]*(\.[0-9]+)?[kM]$")
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
@@ -26,7 +31,7 @@ def load_config(path) -> dict:
     if not isinstance(raw, dict):
         raise InputError("expected a mapping at the top level", path=path)
     known = {"output", "segments", "conditions", "audio", "start", "end", "render", "attention_checks", "layout",
-             "drop_joints"}
+             "drop_joints", "equal_size", "bitrate"}
     unknown = set(raw) - known
     if unknown:
         raise InputError(f"unknown key(s) {', '.join(sorted(unknown))}; expected any of {', '.join(sorted(known))}",
@@ -71,6 +76,14 @@ def load_config(path) -> dict:
         raise InputError(f"bad render settings ({exc})", path=path, field="render") from None
     except InputError as exc:
         raise InputError(exc.reason, path=path, field=f"render.{exc.field}" if exc.field else "render") from None
+    cfg["equal_size"] = str(raw.get("equal_size", "off"))
+    if cfg["equal_size"] not in EQUAL_SIZE:
+        raise InputError(f"expected one of {', '.join(EQUAL_SIZE)}, got {cfg['equal_size']!r}", path=path,
+                         field="equal_size")
+    bitrate = str(raw.get("bitrate", DEFAULT_BITRATE))
+    if not BITRATE_RE.match(bitrate):
+        raise InputError(f"expected a bitrate such as 400k or 1.5M, got {bitrate!r}", path=path, field="bitrate")
+    cfg["bitrate"] = bitrate
     checks = raw.get("attention_checks") or []
     if not isinstance(checks, list):
         raise InputError("expected a list", path=path, field="attention_checks")

@@ -17,6 +17,7 @@ import numpy as np
 
 from evalsuite.errors import InputError
 from renderers.audio import fit_length, write_wav
+from renderers.filesize import cbr_params
 from renderers.media_probe import probe as probe  # public here too: renderers.video.probe
 
 
@@ -52,10 +53,11 @@ class VideoWriter:
         fps: frame rate (any positive number; passed to ffmpeg as a fraction).
         audio: ``(samples (n, ch) float32, rate)`` already aligned with the video, or None.
         crf: x264 constant rate factor (18 = visually lossless, 23 = ffmpeg's default).
+        bitrate: constant bitrate instead of ``crf`` (e.g. ``"400k"``; :func:`renderers.filesize.cbr_params`).
     """
 
     def __init__(self, path, width: int, height: int, fps: float, audio=None, crf: int = 20,
-                 preset: str = "veryfast"):
+                 preset: str = "veryfast", bitrate: str | None = None):
         import imageio_ffmpeg
 
         self.path = pathlib.Path(path)
@@ -68,7 +70,8 @@ class VideoWriter:
             os.close(fd)
             write_wav(self._wav, audio[0], audio[1])
             audio_path = self._wav
-        params = ["-preset", preset, "-crf", str(int(crf)), "-movflags", "+faststart"]
+        rate = cbr_params(bitrate) if bitrate else ["-crf", str(int(crf))]
+        params = ["-preset", preset, *rate, "-movflags", "+faststart"]
         if audio is not None:
             params += ["-b:a", "128k"]
         self._gen = imageio_ffmpeg.write_frames(

@@ -42,14 +42,14 @@ def study():
               "database (needed before starting several gunicorn workers).")
 def build(study_file, out, db):
     """Validate STUDY_FILE and write its balanced session plans."""
+    from study_app import design
     from study_app.definition import load_study
-    from study_app.design import balance_report, build_plans, default_plans_path, position_spread, write_plans
 
     st = load_study(study_file)
-    plans = build_plans(st)
-    path = write_plans(plans, out or default_plans_path(st))
+    plans = design.build_plans(st)
+    path = design.write_plans(plans, out or design.default_plans_path(st))
     click.echo(f"{len(plans['plans'])} session plans for study {st.id!r} -> {path}")
-    report = balance_report(plans, st)
+    report = design.balance_report(plans, st)
     if report["pairs"]:
         click.echo("pairwise comparisons (block, A, B): times with A left / A right")
         keys = sorted({k[:3] for k in report["pairs"]})
@@ -64,10 +64,18 @@ def build(study_file, out, db):
             f"{b}/{c}: {n}" for (b, c), n in sorted(per_cond.items())))
     spreads = [(what, block, d) for what, key in (("page positions", "page_positions"), ("mushra slots", "mushra_slots"),
                                                  ("pairwise sides", "pairs"))
-               for block, d in sorted(position_spread(report[key]).items())]
+               for block, d in sorted(design.position_spread(report[key]).items())]
     if spreads:
         click.echo("orders, largest distance of a count from equal (0: exact, up to 1: equal within one): "
                    + ", ".join(f"{what} {block} {d:.2g}" for what, block, d in spreads))
+    uneven = design.size_spread(plans, st)
+    if uneven:
+        n_pages = sum(1 for p in plans["plans"] for page in p["pages"] if "block" in page)
+        w = uneven[0]
+        click.echo(f"warning: on {len(uneven)} of {n_pages} rating pages the video files differ in size by more than "
+                   f"10% (largest: {w['ratio']:.1f}x on {w['plan']}/{w['page']}, {w['smallest']:,} to "
+                   f"{w['largest']:,} bytes); a participant can tell the clips apart by size in the browser's network "
+                   "panel: render the stimuli with equal_size: pad or cbr (docs/render.md)", err=True)
     if db:
         from study_app.storage import init_db, make_engine
         init_db(make_engine(db), st, plans)

@@ -228,3 +228,29 @@ def position_spread(counts: Counter) -> dict:
         mean = sum(full) / len(full)
         spread[row[0]] = max(spread.get(row[0], 0.0), max(abs(v - mean) for v in full))
     return spread
+
+
+SIZE_TOLERANCE = 0.10   # files of one page may differ by this share of the smallest before build warns
+
+
+def size_spread(plans: dict, study: Study) -> list[dict]:
+    """Pages whose media files differ in size by more than :data:`SIZE_TOLERANCE` (``max / min - 1``): a
+    participant watching the browser's network panel could tell the clips apart. One entry per page:
+    ``plan, page, smallest, largest, ratio``; largest ratio first."""
+    sizes: dict[str, int] = {}
+    out = []
+    for plan in plans["plans"]:
+        for p in plan["pages"]:
+            if not get_kind(p["type"]).block:
+                continue
+            kind = get_block_kind(p["type"])
+            files = {f for k in range(kind.n_slots(p)) if (f := kind.media(study, p, k).file)}
+            if len(files) < 2:
+                continue
+            for f in files - sizes.keys():
+                sizes[f] = (study.manifest.root / f).stat().st_size
+            lo, hi = min(sizes[f] for f in files), max(sizes[f] for f in files)
+            if hi > lo * (1 + SIZE_TOLERANCE):
+                out.append({"plan": plan["key"], "page": p["page"], "smallest": lo, "largest": hi,
+                            "ratio": hi / max(lo, 1)})
+    return sorted(out, key=lambda r: -r["ratio"])

@@ -201,3 +201,25 @@ def test_the_demo_leaves_audio_checks_out_of_its_muted_blocks(folder, tmp_path):
     with pytest.raises(StudyDefinitionError, match="needs sound"):
         load_study(target / "full.yaml")
     assert silent_manifest(folder / "stim" / "manifest.csv", print) == folder / "stim" / "manifest.csv"
+
+
+def test_build_warns_when_a_pages_files_differ_in_size(tmp_path):
+    from click.testing import CliRunner
+
+    from evalsuite.cli import main
+    from renderers.filesize import pad_group
+    from study_app.design import size_spread
+
+    path = h.make_study(tmp_path)
+    r = CliRunner().invoke(main, ["study", "build", str(path)])
+    assert r.exit_code == 0, r.output
+    assert "warning: on " in r.output and "differ in size by more than 10%" in r.output
+    study = load_study(path)
+    worst = size_spread(build_plans(study), study)[0]
+    assert worst["ratio"] > 1.1 and f"{worst['ratio']:.1f}x on {worst['plan']}/{worst['page']}" in r.output
+    # the sizes evened out per segment (as `render stimuli` does with equal_size): no warning
+    for seg in h.SEGMENTS:
+        pad_group(study.manifest.root / s.file for s in study.manifest.stimuli if s.segment == seg)
+    r = CliRunner().invoke(main, ["study", "build", str(path)])
+    assert r.exit_code == 0 and "differ in size" not in r.output
+    assert size_spread(build_plans(study), study) == []
