@@ -135,6 +135,7 @@ def test_wrong_model_files_are_refused(tmp_path):
             arrays, J_regressor=arrays["J_regressor"][:52]),
         r"shapedirs: found shape \(50, 20\)": dict(arrays, shapedirs=arrays["shapedirs"][:, 0]),
         "kintree_table: .*SMPL-X parent table": dict(arrays, kintree_table=arrays["kintree_table"][:, ::-1]),
+        "J_regressor: holds pickled Python objects": dict(arrays, J_regressor=np.array([{"sparse": 1}], dtype=object)),
     }
     for i, (pattern, content) in enumerate(cases.items()):
         path = tmp_path / f"bad{i}.npz"

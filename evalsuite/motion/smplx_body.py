@@ -111,7 +111,14 @@ def _arrays(path: pathlib.Path, keys: tuple[str, ...]) -> dict[str, np.ndarray]:
             if missing:
                 raise InputError(f"not an SMPL-X model file: missing key {missing[0]!r} (expected {', '.join(keys)})",
                                  path=path)
-            return {k: np.asarray(npz[k]) for k in keys}
+            out = {}
+            for k in keys:
+                try:
+                    out[k] = np.asarray(npz[k])
+                except ValueError:
+                    raise InputError("holds pickled Python objects; evalsuite reads plain arrays only (use the "
+                                     ".npz model file of the SMPL-X download)", path=path, field=k) from None
+            return out
     except InputError:
         raise
     except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
