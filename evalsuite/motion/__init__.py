@@ -4,7 +4,9 @@ Modules: :mod:`~evalsuite.motion.bvh` (read/write), :mod:`~evalsuite.motion.fk` 
 kinematics and its conventions), :mod:`~evalsuite.motion.rotations`,
 :mod:`~evalsuite.motion.ops` (joint selection, resampling, cutting, centering),
 :mod:`~evalsuite.motion.filters` (smoothing), :mod:`~evalsuite.motion.presets` (named joint
-sets), :mod:`~evalsuite.motion.io` (loading/saving any supported file).
+sets), :mod:`~evalsuite.motion.io` (loading/saving any registered file type),
+:mod:`~evalsuite.motion.formats` (the motion format registry), :mod:`~evalsuite.motion.smplx` and its
+siblings (SMPL-X files, positions from the user's model file, :class:`~evalsuite.motion.smplx_motion.SmplxMotion`).
 """
 from evalsuite.motion.io import load_motion, save_motion
 from evalsuite.motion.motion import Motion

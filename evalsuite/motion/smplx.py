@@ -54,9 +54,9 @@ _EXPECTED_POSES = ("(T, 165) or (T, 55, 3) for SMPL-X (55 joints x axis-angle), 
                    "the SMPL-H layout (52 joints: no jaw and eyes)")
 
 
-@dataclass
+@dataclass(eq=False)
 class SmplxData:
-    """One SMPL-X recording.
+    """One SMPL-X recording (compared by identity: its fields are arrays).
 
     Attributes:
         poses: ``(T, 165)`` float64, axis-angle per joint in radians (joint ``j`` is columns ``3j:3j+3``).
