@@ -100,7 +100,9 @@ def study_definition(manifest_path: pathlib.Path, study_dir: pathlib.Path) -> di
             {"type": "instructions", "id": "intro", "title": "Instructions",
              "text": "Watch both videos to the end, then answer. Some videos ask you to give a "
                      "particular answer: please do as they say."},
-            {"type": "training", "id": "training", "of": "human_likeness", "count": 1},
+            # Practice needs a pair on a segment the session does not rate (one segment of three conditions has none).
+            *([{"type": "training", "id": "training", "of": "human_likeness", "count": 1}]
+              if len(pairs) * len(segments) > hl_pages else []),
             pairwise,
             mushra,
             {"type": "finish", "id": "finish", "text": "Thank you for taking part!"},

@@ -223,3 +223,15 @@ def test_build_warns_when_a_pages_files_differ_in_size(tmp_path):
     r = CliRunner().invoke(main, ["study", "build", str(path)])
     assert r.exit_code == 0 and "differ in size" not in r.output
     assert size_spread(build_plans(study), study) == []
+
+
+def test_the_demo_study_builds_on_a_single_segment(tmp_path):
+    # The render step's bundled samples give one segment: every pair is rated, so no practice page is possible.
+    from study_app.demo import study_definition
+    from study_app.samples import make_sample_stimuli
+
+    manifest = make_sample_stimuli(tmp_path / "stim", ["natural", "static", "jitter"], ["sample"], seconds=0.5)
+    (tmp_path / "study.yaml").write_text(yaml.safe_dump(study_definition(manifest, tmp_path), sort_keys=False))
+    study = load_study(tmp_path / "study.yaml")
+    assert "training" not in {p.type for p in study.pages}
+    assert build_plans(study)["plans"]
