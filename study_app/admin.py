@@ -14,7 +14,14 @@ from study_app.context import get_store, get_study
 from study_app.export import raw_json_chunks, result_rows, results_csv
 from study_app.monitor import participant_rows, status_counts, unplayable_reports
 from study_app.pages import get_kind
-from study_app.security import admin_logins, admin_required, check_token
+from study_app.security import (
+    address_group,
+    admin_logins,
+    admin_required,
+    check_token,
+    end_admin_session,
+    start_admin_session,
+)
 from study_app.storage import utcnow
 
 bp = Blueprint("admin", __name__)
@@ -24,7 +31,7 @@ bp = Blueprint("admin", __name__)
 def login():
     error = ""
     if request.method == "POST":
-        address, logins = request.remote_addr or "unknown", admin_logins()
+        address, logins = address_group(request.remote_addr), admin_logins()
         wait = logins.retry_after(address)
         if wait:
             resp = Response(render_template("admin_login.html", error="Too many wrong tokens from this address; "
@@ -35,7 +42,7 @@ def login():
         if isinstance(given, str) and check_token(given, current_app.config["ADMIN_TOKEN"]):
             logins.succeeded(address)
             session.clear()
-            session["admin"] = True
+            start_admin_session()
             return redirect(url_for("admin.overview"))
         logins.failed(address)
         error = "Wrong token."
@@ -44,7 +51,7 @@ def login():
 
 @bp.route("/logout", methods=["POST"])
 def logout():
-    session.pop("admin", None)
+    end_admin_session()
     return redirect(url_for("admin.login"))
 
 

@@ -7,7 +7,6 @@ import pathlib
 from flask import Flask, jsonify, render_template, request
 from flask_wtf.csrf import CSRFError, CSRFProtect
 from jinja2 import ChoiceLoader, FileSystemLoader
-from werkzeug.middleware.proxy_fix import ProxyFix
 
 from study_app.context import install
 from study_app.definition import Study, load_study
@@ -15,6 +14,7 @@ from study_app.design import default_plans_path, entry_pages, read_plans
 from study_app.errors import StudyStateError
 from study_app.pages import get_kind, page_kinds
 from study_app.policy import Rules
+from study_app.security import TrustedProxies, parse_networks
 from study_app.storage import Store, init_db, make_engine
 
 csrf = CSRFProtect()
@@ -31,7 +31,9 @@ def create_app(config: dict) -> Flask:
     and ``ADMIN_TOKEN`` (both required, at least 12 characters; no defaults exist),
     ``SESSION_COOKIE_SECURE`` (default True), ``INIT_DB`` (create tables and store plans,
     default True), ``TRUSTED_PROXIES`` (reverse proxies in front of the server whose ``X-Forwarded-For``
-    gives the client address, default 0). Anything else is passed to ``app.config``.
+    gives the client address, default 0) and ``TRUSTED_PROXY_ADDRESSES`` (the addresses or networks those
+    proxies connect from, a list or comma-separated; default ``127.0.0.1, ::1``: the header is believed only
+    from them). Anything else is passed to ``app.config``.
     """
     config = dict(config)
     for key in ("SECRET_KEY", "ADMIN_TOKEN"):
@@ -67,6 +69,8 @@ def create_app(config: dict) -> Flask:
     if isinstance(proxies, bool) or not isinstance(proxies, int) or not 0 <= proxies <= 5:
         raise StudyStateError("expected the number of trusted reverse proxies in front of the server, 0-5",
                               field="TRUSTED_PROXIES")
+    networks = parse_networks(config.pop("TRUSTED_PROXY_ADDRESSES", None) or ["127.0.0.1", "::1"],
+                              "TRUSTED_PROXY_ADDRESSES")
     url = config.pop("DATABASE_URL", None)
     app.config.update(config)
     if url is None:
@@ -79,7 +83,7 @@ def create_app(config: dict) -> Flask:
     if proxies:
         # Behind reverse proxies the client address is in X-Forwarded-For (the per-address limits use it).
         app.config["TRUSTED_PROXIES_SET"] = True
-        app.wsgi_app = ProxyFix(app.wsgi_app, x_for=proxies)  # type: ignore[method-assign]
+        app.wsgi_app = TrustedProxies(app.wsgi_app, proxies, networks)  # type: ignore[method-assign]
 
     # plug-in page kinds may keep their templates outside the package
     folders = [k.template_folder for k in page_kinds().values() if k.template_folder]
@@ -134,7 +138,8 @@ def create_app_from_env() -> Flask:
 
     Reads ``EVALSUITE_STUDY``, ``EVALSUITE_DATABASE_URL``, ``EVALSUITE_SECRET_KEY``,
     ``EVALSUITE_ADMIN_TOKEN`` and optionally ``EVALSUITE_PLANS``, ``EVALSUITE_TRUSTED_PROXIES`` (e.g. 1
-    behind nginx), ``EVALSUITE_INSECURE_COOKIES=1`` (plain-HTTP testing only).
+    behind nginx), ``EVALSUITE_TRUSTED_PROXY_ADDRESSES`` (comma-separated; default 127.0.0.1,::1),
+    ``EVALSUITE_INSECURE_COOKIES=1`` (plain-HTTP testing only).
     """
     env = os.environ
     missing = [k for k in ("EVALSUITE_STUDY", "EVALSUITE_SECRET_KEY", "EVALSUITE_ADMIN_TOKEN")
@@ -148,6 +153,8 @@ def create_app_from_env() -> Flask:
     if not proxies.isdigit():
         raise StudyStateError(f"expected a number of proxies, got {proxies!r}", field="EVALSUITE_TRUSTED_PROXIES")
     config["TRUSTED_PROXIES"] = int(proxies)
+    if env.get("EVALSUITE_TRUSTED_PROXY_ADDRESSES"):
+        config["TRUSTED_PROXY_ADDRESSES"] = env["EVALSUITE_TRUSTED_PROXY_ADDRESSES"]
     if env.get("EVALSUITE_INSECURE_COOKIES") == "1":
         config["SESSION_COOKIE_SECURE"] = False
     return create_app(config)

@@ -19,6 +19,7 @@ from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
 from study_app.pages import get_kind
 from study_app.payload import PayloadError, parse_json_object
+from study_app.security import address_group
 from study_app.storage import SubmitStatus
 from study_app.submission import parse_answer_body, validate_submission
 
@@ -206,14 +207,15 @@ def _full():
 
 
 def client_key() -> str:
-    """A keyed hash of the client's address (the per-address limit stores no address)."""
+    """A keyed hash of the client's address, an IPv6 address's /64 (the per-address limit stores no address)."""
     if "X-Forwarded-For" in request.headers and not current_app.config.get("TRUSTED_PROXIES_SET"):
         current_app.config["TRUSTED_PROXIES_SET"] = True      # warn once per process
         current_app.logger.warning("requests carry X-Forwarded-For but no proxy is trusted: every client "
                                    "shares the proxy's address for the per-address limit (set "
                                    "EVALSUITE_TRUSTED_PROXIES, docs/study_app.md section 9)")
     key = current_app.config["SECRET_KEY"].encode()
-    return hmac.new(key, f"address|{request.remote_addr or 'unknown'}".encode(), hashlib.sha256).hexdigest()[:32]
+    group = address_group(request.remote_addr)       # IPv6: its /64
+    return hmac.new(key, f"address|{group}".encode(), hashlib.sha256).hexdigest()[:32]
 
 
 def _ended(sess):

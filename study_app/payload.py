@@ -31,19 +31,24 @@ def _no_constant(name: str) -> Any:
 
 
 def _depth(value: Any) -> int:
-    """Nesting depth of parsed JSON, without recursion."""
+    """Nesting depth of parsed JSON, without recursion; a NUL character in any string or key is a
+    :class:`PayloadError` (PostgreSQL's text cannot hold one: it would fail as a server error)."""
     deepest, stack = 0, [(value, 1)]
     while stack:
         item, depth = stack.pop()
+        if isinstance(item, str) and "\x00" in item:
+            raise PayloadError("a NUL character (\\u0000) in a string; expected text without it")
         if isinstance(item, (dict, list)):
             deepest = max(deepest, depth)
             stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+            if isinstance(item, dict):
+                stack.extend((k, depth) for k in item)
     return deepest
 
 
 def parse_json_object(raw: bytes) -> dict:
     """The request body as a JSON object: strict JSON (no NaN/Infinity), nested at most
-    :data:`MAX_JSON_DEPTH` levels; anything else is a :class:`PayloadError`, never a RecursionError."""
+    :data:`MAX_JSON_DEPTH` levels, no NUL character in a string; anything else is a :class:`PayloadError`, never a RecursionError."""
     import json
 
     try:

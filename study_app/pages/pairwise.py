@@ -152,7 +152,7 @@ class PairwiseKind(BlockKind):
                 raise PayloadError(f"answer.choices.{qid}: expected one of {', '.join(allowed)}")
         reasons = answer.get("reasons", [])
         reason_ids = {r["id"] for r in block["reasons"]}
-        if not isinstance(reasons, list) or any(r not in reason_ids for r in reasons):
+        if not isinstance(reasons, list) or any(not isinstance(r, str) or r not in reason_ids for r in reasons):
             raise PayloadError("answer.reasons: expected a list of reason ids of this page")
         if block["reasons_required"] and not reasons and any(c != "equal" for c in choices.values()):
             raise PayloadError("answer.reasons: please tick at least one reason for your preference")

@@ -21,6 +21,7 @@ from study_app.storage.engine import init_db, make_engine
 from study_app.storage.events import PLAYBACK_KINDS, EventLog
 from study_app.storage.store import Store, SubmitStatus
 from study_app.storage.tables import (
+    AdminLogout,
     Answer,
     Base,
     Entry,
@@ -34,4 +35,5 @@ from study_app.storage.tables import (
 )
 
 __all__ = ["make_engine", "init_db", "Store", "SubmitStatus", "EventLog", "PLAYBACK_KINDS", "utcnow", "Base",
-           "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event", "MediaRequest", "Entry"]
+           "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event", "MediaRequest", "Entry",
+           "AdminLogout"]

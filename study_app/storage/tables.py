@@ -12,7 +12,7 @@ from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Integer, Stri
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 __all__ = ["utcnow", "Base", "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event",
-           "MediaRequest", "Entry"]
+           "MediaRequest", "Entry", "AdminLogout"]
 
 
 def utcnow() -> dt.datetime:
@@ -131,3 +131,10 @@ class Entry(Base):
     address: Mapped[str] = mapped_column(String(64), index=True)
     session_id: Mapped[str] = mapped_column(String(64))
     created_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow, index=True)
+
+
+class AdminLogout(Base):
+    """An admin login ended by logging out: its cookie's random id, refused from then on by every worker."""
+    __tablename__ = "admin_logouts"
+    nonce: Mapped[str] = mapped_column(String(64), primary_key=True)
+    logged_out_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
