@@ -17,6 +17,7 @@ import re
 
 from study_app.errors import StudyDefinitionError
 from study_app.model import MANIFEST_KINDS, MANIFEST_REQUIRED, PLATFORMS, Manifest, Page, Stimulus, Study
+from study_app.outcomes import load_outcomes
 from study_app.pages import get_kind, page_kinds
 from study_app.pages.pairwise import PAIRWISE_ANSWERS
 from study_app.parse import MAX_FILE_BYTES, parse_definition
@@ -219,8 +220,10 @@ def load_study(path) -> Study:
     if study.prolific_study_id and not re.match(r"^[0-9a-fA-F]{24}$", study.prolific_study_id):
         chk.fail("prolific_study_id", f"expected a Prolific study id (24 hexadecimal characters), got "
                  f"{study.prolific_study_id!r}")
+    study.outcomes = load_outcomes(chk, data, study.completion_code, study.failure_code)
+    study.completion_code = study.outcomes["completed"].code
     if platform in ("prolific", "mturk") and not study.completion_code:
-        chk.fail("completion_code", f"missing; expected the completion code for {platform}")
+        chk.fail("completion_code", f"missing; expected the completion code for {platform} (or outcomes.completed)")
     pages = chk.get(data, "pages", "", list, required=True, expected="a list of pages")
     if not pages:
         chk.fail("pages", "expected at least one page")
@@ -234,7 +237,7 @@ TOP_LEVEL_KEYS = ("id", "title", "stimuli", "platform", "sessions", "seed", "com
                   "failure_code", "max_failed_attention_checks", "reservation_minutes",
                   "require_full_playback", "min_width", "block_mobile", "resume", "release_failed",
                   "prolific_study_id", "redirect_seconds", "new_sessions_per_address",
-                  "new_sessions_window_minutes", "playback_min_fraction", "pages")
+                  "new_sessions_window_minutes", "playback_min_fraction", "outcomes", "pages")
 def _load_page(chk: Checker, page, where: str, study: Study) -> Page:
     kinds = page_kinds()
     if not isinstance(page, dict):

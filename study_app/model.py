@@ -85,6 +85,8 @@ class Study:
     # A page is flagged when its time is below this fraction of its longest clip (study_app.playback).
     playback_min_fraction: float = 0.5
     sha256: str = ""
+    # outcome -> study_app.outcomes.OutcomeCode (code and review action per way a session ends)
+    outcomes: dict = field(default_factory=dict)
 
     @property
     def blocks(self) -> dict[str, Page]:

@@ -17,6 +17,7 @@ from flask import Blueprint, abort, current_app, jsonify, redirect, render_templ
 
 from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
+from study_app.outcomes import code_for
 from study_app.pages import get_kind
 from study_app.payload import PayloadError, parse_json_object
 from study_app.security import address_group
@@ -136,6 +137,11 @@ def start(study_id):
     if sess is None:
         return _full()
     if state == "existing":
+        if sess.status != "active" and _may_resume(sess, platform_data):
+            # Re-opening the link after the end (same browser or same platform attempt): the outcome's
+            # code and the return link again.
+            _remember(sess.id)
+            return _ended(sess)
         if sess.status == "finished":
             return _message("Already completed", "You have already completed this study. You can "
                             "take part only once.", 409)
@@ -219,18 +225,19 @@ def client_key() -> str:
 
 
 def _ended(sess):
+    """The page of a session that has ended: its outcome's code (:mod:`study_app.outcomes`), the link back to
+    Prolific with that code, or MTurk's submit form carrying it."""
     study = _study()
+    oc = code_for(study, sess.status, sess.end_reason)
+    code = oc.code if oc else ""
+    link = study.completion_url(code) if study.platform == "prolific" and code else ""
+    mturk = sess.platform_data if study.platform == "mturk" and code else None
     if sess.status == "finished":
-        code = study.completion_code
-        link = study.completion_url(code) if study.platform == "prolific" and code else ""
-        mturk = sess.platform_data if study.platform == "mturk" else None
         return render_template("finish.html", study=study, code=code, link=link, mturk=mturk,
                                text=study.pages[-1].cfg["text"], redirect_seconds=study.redirect_seconds)
-    if sess.status == "failed":
-        code = study.failure_code
-        link = study.completion_url(code) if study.platform == "prolific" and code else ""
-        return render_template("failed.html", study=study, code=code, link=link, reason=sess.end_reason)
-    return _message("Time expired", "Your place in this study has expired. Please return the task.", 410)
+    outcome = oc.outcome if oc else ""
+    return render_template("failed.html", study=study, code=code, link=link, mturk=mturk, outcome=outcome,
+                           reason=sess.end_reason), (410 if sess.status == "expired" else 200)
 
 
 def _json_body() -> dict:

@@ -69,6 +69,9 @@ def after_answer(state: SessionState, outcome: Outcome, pages: list[dict], rules
                       end_reason=reason, honeypot=outcome.honeypot)
 
 
-def plan_after_end(status: str, rules: Rules) -> str:
-    """``used`` (kept with the session) or ``free`` (handed out again) for a plan whose session ended."""
+def plan_after_end(status: str, rules: Rules, reason: str | None = None) -> str:
+    """``used`` (kept with the session) or ``free`` (handed out again) for a plan whose session ended; a
+    participant who did not consent answered nothing, so theirs is always handed out again."""
+    if reason == "no_consent":
+        return "free"
     return "used" if status == "finished" or not rules.release_failed else "free"

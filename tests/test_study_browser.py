@@ -231,11 +231,11 @@ def test_participant_journey_in_chromium(env):
     assert d.page.get_attribute("#return-link", "href") == \
         "https://app.prolific.com/submissions/complete?cc=DONE1234"
 
-    # the same Prolific ID again, in a fresh browser: cannot start over
+    # the same Prolific link again, in a fresh browser: cannot start over, but sees its code again
     again = Driver(env, d.pid)
     again.enter()
     assert again.sid is None
-    assert "already completed" in again.page.content()
+    assert again.page.locator("#completion-code").text_content() == "DONE1234"
     again.shot("second-entry")
 
     # a second participant fails two attention checks and gets the failure code

@@ -213,9 +213,11 @@ def test_a_failed_screening_ends_the_session_with_the_failure_code(folder, tmp_p
     admin = client.get("/admin/", headers=auth).get_data(as_text=True)
     assert h.valid_pid("phpfail01") in admin
     assert "headphone_check" in admin
-    # a second try is refused
+    # a second try cannot start over: the same link shows the screened-out code again
     again = h.Participant(app.test_client(), "phpfail01", "hp-end").enter()
-    assert again.status_code == 409
+    assert again.status_code == 200
+    assert 'id="failure-code">FAIL5678<' in again.get_data(as_text=True)
+    assert again.headers.get("Location") is None
 
 
 def test_on_fail_continue_only_records_the_outcome(folder, tmp_path):

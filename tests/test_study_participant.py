@@ -67,16 +67,24 @@ def test_reentry_resumes_or_is_refused_but_never_restarts(study_dir, db_url):
     assert again.sid == p.sid
     _, data, _ = again.page()
     assert data["index"] == 4
-    # finished participants cannot start over
+    # finished participants cannot start over: the same attempt's link shows their code and return link again
     done, _ = h.run_participant(app, app.test_client(), "preent002", rng)
     r = h.Participant(app.test_client(), "preent002").enter()
+    assert r.status_code == 200
+    assert 'id="completion-code">DONE1234<' in r.get_data(as_text=True)
+    assert "submissions/complete?cc=DONE1234" in r.get_data(as_text=True)
+    # the participant id alone (another attempt's SESSION_ID) shows no code
+    pid = h.valid_pid("preent002")
+    r = app.test_client().get(f"/start/gesture-test?PROLIFIC_PID={pid}&STUDY_ID={h.PROLIFIC_STUDY}&SESSION_ID=x1")
     assert r.status_code == 409
     assert "already completed" in r.get_data(as_text=True)
-    # failed participants neither
+    assert "DONE1234" not in r.get_data(as_text=True)
+    # failed participants neither: theirs is the attention-check outcome's code
     h.run_participant(app, app.test_client(), "preent003", rng, fail_checks=2)
     r = h.Participant(app.test_client(), "preent003").enter()
-    assert r.status_code == 409
-    assert "cannot take part" in r.get_data(as_text=True)
+    assert r.status_code == 200
+    assert 'id="failure-code">FAIL5678<' in r.get_data(as_text=True)
+    assert "attention checks" in r.get_data(as_text=True)
     with store_of(app).Session() as db:
         assert db.query(ParticipantSession).filter_by(participant=h.valid_pid("preent001")).count() == 1
 

@@ -91,9 +91,10 @@ def test_expired_reservation_is_released_and_cannot_restart(study_dir, db_url):
     with store.Session() as db:
         assert db.get(ParticipantSession, b.sid).plan_id == plan_id
         assert db.get(ParticipantSession, a.sid).status == "expired"
-    r = h.Participant(app.test_client(), "pexpire01").enter()
-    assert r.status_code == 409
+    r = h.Participant(app.test_client(), "pexpire01").enter()    # the timed-out outcome's page and code
+    assert r.status_code == 410
     assert "expired" in r.get_data(as_text=True)
+    assert 'id="failure-code">FAIL5678<' in r.get_data(as_text=True)
     assert a.client.get(f"/s/{a.sid}/").status_code == 410
 
 

@@ -61,7 +61,7 @@ def test_answer_payloads_are_validated(study_dir, sqlite_url, desc, body, fragme
 
 
 @pytest.mark.parametrize("page_type,answer,fragment", [
-    ("consent", {"agree": False}, "must agree"),
+    ("consent", {"agree": "yes"}, "must agree"),      # agree: false is "I do not agree"
     ("consent", {"agree": True, "extra": 1}, "unexpected field"),
     ("questionnaire", {"age": 12, "gender": "male"}, "answer.age: expected a number in 18..99"),
     ("questionnaire", {"age": "old", "gender": "male"}, "answer.age: expected a number"),

@@ -314,7 +314,7 @@ class Store:
 
     def _end(self, sess, plan, status, reason, now):
         sess.status, sess.end_reason, sess.finished_at = status, reason, now
-        if plan_after_end(status, self.rules) == "used":
+        if plan_after_end(status, self.rules, reason) == "used":
             plan.status, plan.reserved_until = "used", None
         else:
             # A failed participant's data is excluded, so their plan goes to someone else.
