@@ -8,11 +8,35 @@ from __future__ import annotations
 
 from collections import Counter
 
-from flask import Blueprint, Response, current_app, jsonify, redirect, render_template, request, session, url_for
+from flask import (
+    Blueprint,
+    Response,
+    current_app,
+    flash,
+    get_flashed_messages,
+    jsonify,
+    redirect,
+    render_template,
+    request,
+    session,
+    url_for,
+)
 
 from study_app.context import get_store, get_study
+from study_app.errors import StudyStateError
 from study_app.export import raw_json_chunks, result_rows, results_csv
-from study_app.monitor import participant_rows, status_counts, unplayable_reports
+from study_app.monitor import answer_count, participant_rows, plan_counts, status_counts, unplayable_reports
+from study_app.operations import (
+    exclude,
+    export_dump,
+    forget,
+    pilot_mode,
+    pseudonym_key,
+    release_plan,
+    review_csv,
+    set_pilot,
+    topup,
+)
 from study_app.pages import get_kind
 from study_app.security import (
     address_group,
@@ -76,7 +100,8 @@ def overview():
                            failures=failures, plans=plans, plan_counts=plan_counts,
                            n_answers=len(dump["answers"]), now=now,
                            participants=participant_rows(store, study, now),
-                           reports=unplayable_reports(store, study), refresh_seconds=_refresh_seconds())
+                           reports=unplayable_reports(store, study), refresh_seconds=_refresh_seconds(),
+                           pilot=pilot_mode(store, study), messages=get_flashed_messages(with_categories=True))
 
 
 def _refresh_seconds() -> int:
@@ -95,23 +120,73 @@ def status_json():
     return jsonify(study=study.id, generated_at=now.isoformat(timespec="seconds") + "Z",
                    refresh_seconds=_refresh_seconds(),
                    sessions={"started": sum(statuses.values()), **{k: statuses.get(k, 0) for k in
-                                                                    ("active", "finished", "failed", "expired")}},
+                                                                    ("active", "finished", "failed", "expired")},
+                             "answers": answer_count(store, study)},
+                   plans=plan_counts(store, study, now),
                    participants=participant_rows(store, study, now), reports=unplayable_reports(store, study))
+
+
+def _export_dump():
+    """The dump for an export: ``?pilot=1`` and ``?excluded=1`` keep pilot and excluded sessions,
+    ``?pseudonymise=1`` replaces participant ids by keyed hashes (:mod:`study_app.operations`)."""
+    study, store = get_study(), get_store()
+    key = pseudonym_key(current_app.config["SECRET_KEY"]) if request.args.get("pseudonymise") == "1" else None
+    return study, export_dump(store, study, include_pilot=request.args.get("pilot") == "1",
+                              include_excluded=request.args.get("excluded") == "1", pseudonym_key=key)
 
 
 @bp.route("/export/results.csv")
 @admin_required
 def export_csv():
-    study, store = get_study(), get_store()
-    return Response(results_csv(study, store.dump(study.id)), mimetype="text/csv",
+    study, dump = _export_dump()
+    return Response(results_csv(study, dump), mimetype="text/csv",
                     headers={"Content-Disposition": f'attachment; filename="{study.id}-results.csv"'})
 
 
 @bp.route("/export/raw.json")
 @admin_required
 def export_json():
-    study, store = get_study(), get_store()
+    study, dump = _export_dump()
     # streamed: the interaction log is read from the database in batches while the response is sent
-    return Response(raw_json_chunks(study, store.dump(study.id)), mimetype="application/json",
+    return Response(raw_json_chunks(study, dump), mimetype="application/json",
                     headers={"Content-Disposition": f'attachment; filename="{study.id}-raw.json"'})
 
+
+@bp.route("/export/review.csv")
+@admin_required
+def export_review():
+    """Each ended submission's outcome, code, action and reason, for Prolific's bulk approve/reject."""
+    study, dump = _export_dump()
+    return Response(review_csv(study, dump), mimetype="text/csv",
+                    headers={"Content-Disposition": f'attachment; filename="{study.id}-review.csv"'})
+
+
+@bp.route("/op/<name>", methods=["POST"])
+@admin_required
+def operation(name):
+    """The operations of the admin page's forms: release, topup, exclude, include, forget, pilot."""
+    study, store, form = get_study(), get_store(), request.form
+    try:
+        if name == "release":
+            release_plan(store, study, form.get("plan", ""))
+            flash(f"plan {form.get('plan')} released", "ok")
+        elif name == "topup":
+            n = form.get("n", "")
+            keys = topup(store, study, int(n) if n.isdigit() else 0)
+            flash(f"{len(keys)} plans added", "ok")
+        elif name in ("exclude", "include"):
+            exclude(store, study, form.get("session", ""), form.get("reason", ""), undo=name == "include")
+            flash(f"session {form.get('session')} {name}d", "ok")
+        elif name == "forget":
+            if form.get("confirm") != form.get("participant"):
+                raise StudyStateError("type the participant id a second time to confirm", field="confirm")
+            n = forget(store, study, form.get("participant", ""))
+            flash(f"participant forgotten: {n} rows deleted", "ok")
+        elif name == "pilot":
+            set_pilot(store, study, form.get("on") == "1")
+            flash(f"pilot mode {'on' if form.get('on') == '1' else 'off'}", "ok")
+        else:
+            return Response("unknown operation", status=404)
+    except StudyStateError as exc:
+        flash(str(exc), "error")
+    return redirect(url_for("admin.overview"))

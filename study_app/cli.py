@@ -8,6 +8,8 @@ import secrets
 
 import click
 
+from study_app.cli_ops import COMMANDS
+
 DB_HELP = ("Database URL (SQLAlchemy): sqlite:///path.db or postgresql+psycopg://user@host/db. "
            "Default: SQLite study.db in the instance folder.")
 
@@ -140,21 +142,36 @@ def serve(study_file, db, instance, host, port, admin_token, secret_key, secure_
               show_default=True, help="results.csv in the long format (docs/results_format.md).")
 @click.option("--raw", type=click.Path(dir_okay=False), default=None,
               help="Also write everything stored (sessions, answers, events, plans) as JSON.")
-def export(study_file, db, instance, out, raw):
-    """Export the answers of STUDY_FILE to results.csv (and raw JSON)."""
+@click.option("--pseudonymise", is_flag=True, help="Replace participant and platform ids by keyed hashes "
+              "(HMAC-SHA256 with --key; the same key gives the same pseudonyms).")
+@click.option("--key", envvar="EVALSUITE_SECRET_KEY", default=None,
+              help="Secret of the pseudonyms (default: EVALSUITE_SECRET_KEY).")
+@click.option("--include-pilot", is_flag=True, help="Keep pilot sessions (left out by default).")
+@click.option("--include-excluded", is_flag=True, help="Keep excluded sessions (left out by default).")
+def export(study_file, db, instance, out, raw, pseudonymise, key, include_pilot, include_excluded):
+    """Export the answers of STUDY_FILE to results.csv (and raw JSON), without pilot and excluded sessions."""
     from study_app.definition import load_study
     from study_app.export import raw_json_chunks, result_rows, results_csv
-    from study_app.storage import Store, make_engine
+    from study_app.operations import export_dump, pseudonym_key
+    from study_app.storage import Base, Store, make_engine
 
+    if pseudonymise and not key:
+        raise click.ClickException("--pseudonymise needs --key or EVALSUITE_SECRET_KEY")
     st = load_study(study_file)
     store = Store(make_engine(_db_url(study_file, instance, db)))
-    dump = store.dump(st.id)
+    Base.metadata.create_all(store.engine)
+    dump = export_dump(store, st, include_pilot=include_pilot, include_excluded=include_excluded,
+                       pseudonym_key=pseudonym_key(key) if pseudonymise else None)
     pathlib.Path(out).write_text(results_csv(st, dump))
     click.echo(f"{len(result_rows(st, dump))} judgements from {len(dump['sessions'])} sessions -> {out}")
     if raw:
         with open(raw, "w", encoding="utf-8") as fh:
             fh.writelines(raw_json_chunks(st, dump))
         click.echo(f"raw JSON -> {raw}")
+
+
+for _command in COMMANDS:
+    study.add_command(_command)
 
 
 @study.command("admin-token")

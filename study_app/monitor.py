@@ -14,7 +14,7 @@ from sqlalchemy import func, select
 
 from study_app.model import Study
 from study_app.pages import get_kind
-from study_app.storage import Event, PageView, ParticipantSession, Plan, Store
+from study_app.storage import Answer, Event, PageView, ParticipantSession, Plan, Store
 
 __all__ = ["REPORT_EVENT", "participant_rows", "unplayable_reports", "status_counts", "duration"]
 
@@ -142,3 +142,22 @@ def unplayable_reports(store: Store, study: Study) -> list[dict]:
         out.append({**e, "participants": len(e["participants"]), "pages": ", ".join(sorted(e["pages"])),
                     "last_reported_at": _iso(e["last_reported_at"])})
     return sorted(out, key=lambda e: (-e["reports"], e["file"]))
+
+
+def answer_count(store: Store, study: Study) -> int:
+    """Answers stored for the study (counted in SQL)."""
+    with store.ReadSession() as db:
+        return int(db.scalar(select(func.count(Answer.id)).join(
+            ParticipantSession, Answer.session_id == ParticipantSession.id)
+            .where(ParticipantSession.study == study.id)) or 0)
+
+
+def plan_counts(store: Store, study: Study, now: dt.datetime) -> dict[str, int]:
+    """Plans by status, a reservation past its time counted as ``reserved (expired)``."""
+    with store.ReadSession() as db:
+        rows = db.execute(select(Plan.status, Plan.reserved_until).where(Plan.study == study.id)).all()
+    out: dict[str, int] = {}
+    for status, until in rows:
+        key = "reserved (expired)" if status == "reserved" and until is not None and until < now else status
+        out[key] = out.get(key, 0) + 1
+    return out

@@ -17,6 +17,7 @@ from flask import Blueprint, abort, current_app, jsonify, redirect, render_templ
 
 from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
+from study_app.operations import mark_if_pilot
 from study_app.outcomes import code_for
 from study_app.pages import get_kind
 from study_app.payload import PayloadError, parse_json_object
@@ -136,6 +137,8 @@ def start(study_id):
         return page, code, {"Retry-After": str(wait)}
     if sess is None:
         return _full()
+    if state == "created":
+        mark_if_pilot(_store(), study, sess.id)        # pilot mode: kept out of the export by default
     if state == "existing":
         if sess.status != "active" and _may_resume(sess, platform_data):
             # Re-opening the link after the end (same browser or same platform attempt): the outcome's

@@ -1,4 +1,4 @@
-// The admin page refreshes its session counts, participant table and "does not play" reports by itself,
+// The admin page refreshes its session and answer counts, plan counts, participant table and "does not play" reports by itself,
 // polling status.json (same admin login) every data-refresh seconds.
 (function () {
   "use strict";
@@ -28,6 +28,8 @@
       var td = document.querySelector("#sessions td[data-key='" + k + "']");
       if (td) td.textContent = String(s.sessions[k]);
     });
+    var counts = document.getElementById("plan-counts");
+    if (counts && s.plans) counts.textContent = Object.keys(s.plans).map(function (k) { return k + ": " + s.plans[k]; }).join(", ");
     fill(document.querySelector("#participants tbody"), s.participants, function (p, tr) {
       tr.setAttribute("data-session", p.session);
       return [cell(p.participant), cell(p.platform), cell(p.status + (p.end_reason ? " (" + p.end_reason + ")" : "")),

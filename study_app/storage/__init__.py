@@ -30,10 +30,12 @@ from study_app.storage.tables import (
     PageView,
     ParticipantSession,
     Plan,
+    SessionMark,
+    StudyFlag,
     StudyRecord,
     utcnow,
 )
 
 __all__ = ["make_engine", "init_db", "Store", "SubmitStatus", "EventLog", "PLAYBACK_KINDS", "utcnow", "Base",
            "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event", "MediaRequest", "Entry",
-           "AdminLogout"]
+           "AdminLogout", "SessionMark", "StudyFlag"]

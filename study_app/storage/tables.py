@@ -12,7 +12,8 @@ from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Integer, Stri
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 __all__ = ["utcnow", "Base", "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event",
-           "MediaRequest", "Entry", "AdminLogout"]
+           "MediaRequest", "Entry", "AdminLogout",
+           "SessionMark", "StudyFlag"]
 
 
 def utcnow() -> dt.datetime:
@@ -138,3 +139,23 @@ class AdminLogout(Base):
     __tablename__ = "admin_logouts"
     nonce: Mapped[str] = mapped_column(String(64), primary_key=True)
     logged_out_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class SessionMark(Base):
+    """What the researcher said about a session during the study: a pilot session (kept out of the export
+    by default) or one excluded, with the reason (:mod:`study_app.operations`)."""
+    __tablename__ = "session_marks"
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), primary_key=True)
+    pilot: Mapped[bool] = mapped_column(Boolean, default=False)
+    excluded: Mapped[bool] = mapped_column(Boolean, default=False)
+    reason: Mapped[str] = mapped_column(String(500), default="")
+    marked_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class StudyFlag(Base):
+    """A switch of a running study, e.g. ``pilot`` (new sessions are pilot sessions) or ``topups`` (how
+    many top-up batches of plans were added)."""
+    __tablename__ = "study_flags"
+    study: Mapped[str] = mapped_column(String(64), primary_key=True)
+    name: Mapped[str] = mapped_column(String(32), primary_key=True)
+    value: Mapped[str] = mapped_column(String(200), default="")
