@@ -21,7 +21,8 @@ from study_app.model import Study
 from study_app.outcomes import code_for
 from study_app.storage import Base, ParticipantSession, Plan, SessionMark, Store, StudyFlag, utcnow
 
-__all__ = ["release_plan", "topup", "exclude", "set_pilot", "pilot_mode", "mark_if_pilot", "forget", "marks",
+__all__ = ["release_plan", "topup", "exclude", "set_pilot", "pilot_mode", "mark_if_pilot", "forget",
+           "decline_without_plan", "marks",
            "export_dump", "pseudonym", "pseudonym_key", "PLATFORM_ID_FIELDS", "review_rows", "review_csv", "REVIEW_COLUMNS"]
 
 log = logging.getLogger("study_app.operations")
@@ -124,6 +125,15 @@ def mark_if_pilot(store: Store, study: Study, session_id: str) -> bool:
         if db.get(SessionMark, session_id) is None:
             db.add(SessionMark(session_id=session_id, pilot=True))
     return True
+
+
+def decline_without_plan(store: Store, session_id: str) -> None:
+    """End a session that declined consent before it held a plan (every plan was taken): ``failed`` with
+    reason ``no_consent``, so the participant gets the no-consent code rather than "study full"."""
+    with store.Session.begin() as db:
+        sess = db.get(ParticipantSession, session_id)
+        if sess is not None and sess.status == "active" and sess.plan_id is None:
+            sess.status, sess.end_reason, sess.finished_at = "failed", "no_consent", utcnow()
 
 
 def marks(store: Store, study: Study) -> dict[str, SessionMark]:

@@ -17,7 +17,7 @@ from flask import Blueprint, abort, current_app, jsonify, redirect, render_templ
 
 from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
-from study_app.operations import mark_if_pilot
+from study_app.operations import decline_without_plan, mark_if_pilot
 from study_app.outcomes import code_for
 from study_app.pages import get_kind
 from study_app.payload import PayloadError, parse_json_object
@@ -264,6 +264,10 @@ def answer(sid, index):
     if status is SubmitStatus.MISSING:
         return jsonify(error="this session does not exist (any more); open the study link again"), 404
     nxt = url_for("participant.page", sid=sid)
+    if status is SubmitStatus.FULL and index == 0 and body.answer == {"agree": False}:
+        # "I do not agree" while every plan is taken: the participant still leaves with the no-consent code
+        decline_without_plan(store, sid)
+        return jsonify(status="stored", next=nxt, session_status="failed")
     if status is SubmitStatus.FULL:
         return jsonify(error="All places in this study are taken at the moment. Please return the task and "
                        "try again later.", next=nxt), 409

@@ -193,3 +193,19 @@ def test_each_outcome_reaches_prolific_with_its_code_in_chromium(browser_env, ou
     assert page.locator("#completion-code, #failure-code").text_content() == CODES[outcome]
     assert page.locator("#return-link").get_attribute("href").endswith(f"cc={CODES[outcome]}")
     context.close()
+
+
+def test_declining_while_every_plan_is_taken_still_gets_the_no_consent_code(outcome_dir, sqlite_url):
+    app = make_app(outcome_dir, sqlite_url)
+    reader = h.Participant(app.test_client(), "oc-reader1")        # reads the consent page ...
+    assert reader.enter().status_code == 302
+    _, data, csrf = reader.page()
+    with store_of(app).Session() as db:
+        n_plans = db.query(Plan).count()
+    for i in range(n_plans):                                        # ... while others take every place
+        p = h.Participant(app.test_client(), f"oc-full{i:03d}")
+        p.enter()
+        assert p.consent().status_code == 200
+    r = reader.submit(data, csrf, {"agree": False})
+    assert r.status_code == 200 and r.get_json()["session_status"] == "failed"
+    assert ">NOCONS01<" in reader.client.get(f"/s/{reader.sid}/").get_data(as_text=True)
