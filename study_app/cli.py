@@ -90,8 +90,8 @@ def build(study_file, out, db):
 @click.option("--instance", type=click.Path(file_okay=False), default=None,
               help="Folder for the default SQLite database and the generated cookie secret "
                    "(default: instance/ beside the study file).")
-@click.option("--host", default="127.0.0.1", show_default=True)
-@click.option("--port", default=5000, show_default=True, type=int)
+@click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on.")
+@click.option("--port", default=5000, show_default=True, type=int, help="Port to listen on.")
 @click.option("--admin-token", envvar="EVALSUITE_ADMIN_TOKEN", required=True,
               help="Token for /admin (or env EVALSUITE_ADMIN_TOKEN); at least 12 characters. "
                    "`evalsuite study admin-token` makes one.")

@@ -294,3 +294,16 @@ def test_prolific_review_carries_out_the_review_export(study_dir, sqlite_url, fa
          "--base-url", url)
     assert [(p, b) for p, _, b in calls] == [(f"/api/v1/submissions/se{nocons.pid}/request-return/",
                                               {"request_return_reasons": ["did not consent"]})]
+
+
+def test_every_study_command_and_option_explains_itself():
+    import click
+
+    out = _cli("--help")
+    for name in ("release", "topup", "exclude", "pilot", "forget", "review-export", "prolific-review"):
+        assert name in out
+        assert "Usage" in _cli(name, "--help")
+    for name, cmd in study_cli.commands.items():
+        assert cmd.help, name
+        assert [p.name for p in cmd.params if isinstance(p, click.Option) and not p.help] == [], name
+    assert "--pseudonymise" in _cli("export", "--help")
