@@ -120,9 +120,8 @@ def status_json():
     return jsonify(study=study.id, generated_at=now.isoformat(timespec="seconds") + "Z",
                    refresh_seconds=_refresh_seconds(),
                    sessions={"started": sum(statuses.values()), **{k: statuses.get(k, 0) for k in
-                                                                    ("active", "finished", "failed", "expired")},
-                             "answers": answer_count(store, study)},
-                   plans=plan_counts(store, study, now),
+                                                                    ("active", "finished", "failed", "expired")}},
+                   answers=answer_count(store, study), plans=plan_counts(store, study, now),
                    participants=participant_rows(store, study, now), reports=unplayable_reports(store, study))
 
 

@@ -389,6 +389,7 @@ def test_admin_page_refreshes_by_itself(env):
         admin.evaluate("window.notReloaded = true")
         before = admin.locator("#participants tbody tr").count()
         started = int(admin.text_content("#sessions td[data-key='started']"))
+        answers = int(admin.text_content("#sessions td[data-key='answers']"))
         plans_before = admin.text_content("#plan-counts")
         newcomer = "7b5c3d1e0f9a8b7c6d5e4f3a"
         j = Journey(env, newcomer)
@@ -409,6 +410,7 @@ def test_admin_page_refreshes_by_itself(env):
             assert "Updated" in admin.text_content("#refreshed")
             # the counters refresh too: sessions started, and the plans (the newcomer's is reserved)
             assert int(admin.text_content("#sessions td[data-key='started']")) == started + 1
+            assert int(admin.text_content("#sessions td[data-key='answers']")) > answers   # the consent at least
             assert admin.text_content("#plan-counts") != plans_before
             assert "reserved" in admin.text_content("#plan-counts")
             admin.screenshot(path=str(env.shots / "admin-participants.png"), full_page=True)

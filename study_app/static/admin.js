@@ -28,6 +28,8 @@
       var td = document.querySelector("#sessions td[data-key='" + k + "']");
       if (td) td.textContent = String(s.sessions[k]);
     });
+    var answers = document.querySelector("#sessions td[data-key='answers']");
+    if (answers && s.answers !== undefined) answers.textContent = String(s.answers);
     var counts = document.getElementById("plan-counts");
     if (counts && s.plans) counts.textContent = Object.keys(s.plans).map(function (k) { return k + ": " + s.plans[k]; }).join(", ");
     fill(document.querySelector("#participants tbody"), s.participants, function (p, tr) {
