@@ -15,6 +15,7 @@ import pathlib
 import urllib.request
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 import study_helpers as h
 from browser_helpers import ARGS as BASE_ARGS
@@ -22,7 +23,7 @@ from browser_helpers import Server, chromium
 from layout_helpers import make_layout_study, make_more_study
 
 from study_app import create_app
-from study_app.context import store_of
+from study_app.context import store_of, study_of
 from study_app.storage import Event
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
@@ -389,7 +390,6 @@ def test_admin_page_refreshes_by_itself(env):
         admin.evaluate("window.notReloaded = true")
         before = admin.locator("#participants tbody tr").count()
         started = int(admin.text_content("#sessions td[data-key='started']"))
-        answers = int(admin.text_content("#sessions td[data-key='answers']"))
         plans_before = admin.text_content("#plan-counts")
         newcomer = "7b5c3d1e0f9a8b7c6d5e4f3a"
         j = Journey(env, newcomer)
@@ -410,9 +410,22 @@ def test_admin_page_refreshes_by_itself(env):
             assert "Updated" in admin.text_content("#refreshed")
             # the counters refresh too: sessions started, and the plans (the newcomer's is reserved)
             assert int(admin.text_content("#sessions td[data-key='started']")) == started + 1
-            assert int(admin.text_content("#sessions td[data-key='answers']")) > answers   # the consent at least
             assert admin.text_content("#plan-counts") != plans_before
             assert "reserved" in admin.text_content("#plan-counts")
+            # and the answer counter, once someone answers a page
+            answers = int(admin.text_content("#sessions td[data-key='answers']"))
+            other = h.Participant(env.server.app.test_client(), "9d7e5f3a1b0c9d8e7f6a5b4c",
+                                  study_of(env.server.app).id)
+            assert other.enter().status_code == 302
+            _, data, csrf = other.page()
+            spec = h.plan_pages(env.server.app, other.sid)[data["index"]]
+            answer = h.make_answer(study_of(env.server.app), spec, np.random.default_rng(0))
+            assert other.submit(data, csrf, answer).status_code == 200
+            for _ in range(100):
+                if int(admin.text_content("#sessions td[data-key='answers']")) > answers:
+                    break
+                admin.wait_for_timeout(100)
+            assert int(admin.text_content("#sessions td[data-key='answers']")) == answers + 1
             admin.screenshot(path=str(env.shots / "admin-participants.png"), full_page=True)
         finally:
             j.context.close()
