@@ -31,6 +31,7 @@ COMMANDS = {
     "features": "evalsuite.features.cli:features",
     "validate-metrics": "evalsuite.validity.cli:validate_metrics",
     "correlate": "evalsuite.analysis.correlate.cli:correlate",
+    "import-judgements": "evalsuite.analysis.importers.cli:import_judgements_command",
     "validate-submission": "evalsuite.leaderboard.submission_cli:validate_submission_command",
 }
 
