@@ -496,3 +496,96 @@ def test_analyze_scores_malformed_stops_before_the_analysis(tmp_path):
     r = invoke("analyze", SAMPLE, "-o", tmp_path / "r", "--scores", bad)
     assert r.exit_code == 1 and "summary.csv:2: value: 'x' is not a number" in r.output
     assert not (tmp_path / "r" / "report.html").exists()
+
+
+def test_two_level_bootstrap_resamples_conditions_and_participants_together():
+    from evalsuite.analysis.correlate.bootstrap import two_level_bootstrap
+
+    x = np.arange(8.0)
+    y = np.array([0.0, 2, 1, 3, 5, 4, 7, 6])
+    R = 400
+    # no rater uncertainty: the same as resampling the conditions with the documented generator
+    lo, hi, tlo, thi, bad = two_level_bootstrap(x, np.tile(y, (R, 1)), seed=3)
+    idx = np.random.default_rng([3, 2]).integers(0, 8, size=(R, 8))
+    rho = np.array([stats.spearmanr(x[i], y[i]).statistic if np.ptp(x[i]) and np.ptp(y[i]) else np.nan for i in idx])
+    assert bad == int(np.isnan(rho).sum())
+    assert (lo, hi) == pytest.approx(tuple(np.nanpercentile(rho, [2.5, 97.5])), abs=1e-9)
+    # with rater noise the interval is wider than either source alone gives
+    H = y + np.random.default_rng(0).normal(0, 1.5, size=(R, 8))
+    lo2, hi2, *_ = two_level_bootstrap(x, H, seed=3)
+    rr = np.array([stats.spearmanr(x, h).statistic for h in H])
+    p_lo, p_hi = np.percentile(rr, [2.5, 97.5])
+    assert hi2 - lo2 > hi - lo and hi2 - lo2 > p_hi - p_lo
+
+
+def test_correlate_reports_two_level_cis_with_results(tmp_path):
+    rng = np.random.default_rng(1)
+    conds = [f"S{i}" for i in range(6)]
+    rows = []
+    for p in range(12):
+        for seg in range(3):
+            for i, c in enumerate(conds):
+                rows.append(dict(study="s", participant=f"p{p}", session=f"p{p}", session_status="finished",
+                                 page=f"p{p}-{seg}", page_type="mushra", question="hl", condition=c, condition_a="",
+                                 condition_b="", answer=str(int(np.clip(10 * i + rng.normal(0, 15) + 20, 0, 100))),
+                                 is_training=0, is_attention_check=0, attention_passed="", segment=f"g{seg}"))
+    pd.DataFrame(rows).to_csv(tmp_path / "results.csv", index=False)
+    resampler = corr.ParticipantResampler.from_results(tmp_path / "results.csv")
+    scores = pd.DataFrame({"condition": conds, "metric": "m", "value": [5.0, 4, 3.5, 3, 1, 0.5]})
+    human = pd.DataFrame({"condition": conds, "question": "hl", "measure": "mean",
+                          "value": resampler.point("ratings", "hl", "mean", conds)})
+    human.attrs["source"] = "ratings"
+    row = corr.correlate(scores, human, n_boot=300, participants=resampler).iloc[0]
+    assert row.spearman_ci_low_both <= row.spearman_rho <= row.spearman_ci_high_both
+    assert row.spearman_ci_high_both - row.spearman_ci_low_both >= (
+        row.spearman_ci_high_participants - row.spearman_ci_low_participants)
+    assert np.isfinite(row.kendall_ci_low_both) and np.isfinite(row.kendall_ci_high_both)
+
+
+def _segment_study(tmp_path):
+    """6 conditions rated on 4 segments: on g0..g2 the ratings follow the metric, on g3 they run against it."""
+    rng = np.random.default_rng(2)
+    conds = [f"S{i}" for i in range(6)]
+    rows, seq = [], []
+    for seg in range(4):
+        sign = -1 if seg == 3 else 1
+        for i, c in enumerate(conds):
+            seq.append(dict(condition=c, sequence=f"g{seg}", metric="m", value=float(i) + 0.1 * seg, unit=""))
+            for p in range(5):
+                rows.append(dict(study="s", participant=f"p{p}", session=f"p{p}", session_status="finished",
+                                 page=f"p{p}-{seg}", page_type="mushra", question="hl", condition=c, condition_a="",
+                                 condition_b="", answer=str(int(50 + sign * 8 * i + rng.integers(-2, 3))),
+                                 is_training=0, is_attention_check=0, attention_passed="", segment=f"g{seg}"))
+    pd.DataFrame(rows).to_csv(tmp_path / "results.csv", index=False)
+    pd.DataFrame(seq).to_csv(tmp_path / "per_sequence.csv", index=False)
+    summary = pd.DataFrame({"condition": conds, "metric": "m", "value": np.arange(6.0)})
+    summary.to_csv(tmp_path / "summary.csv", index=False)
+    vals = pd.DataFrame(rows).assign(v=lambda d: d["answer"].astype(float)).groupby("condition")["v"]
+    pd.DataFrame({"question": "hl", "condition": conds, "median": vals.median()[conds].to_numpy(),
+                  "mean": vals.mean()[conds].to_numpy()}).to_csv(tmp_path / "human.csv", index=False)
+    return rows, seq
+
+
+def test_per_segment_correlations(tmp_path):
+    from evalsuite.analysis.correlate.segments import human_by_segment, per_segment
+
+    rows, seq = _segment_study(tmp_path)
+    t = per_segment(pd.DataFrame(seq), human_by_segment(pd.DataFrame(rows).astype(str)), n_boot=200)
+    by = t.set_index("segment")
+    assert list(by.loc[["g0", "g1", "g2", "g3"], "spearman_rho"]) == [1.0, 1.0, 1.0, -1.0]
+    assert by.loc["(mean)", "spearman_rho"] == pytest.approx(0.5) and by.loc["(mean)", "n"] == 4
+    assert by.loc["(mean)", "spearman_ci_low"] <= 0.5 <= by.loc["(mean)", "spearman_ci_high"]
+
+
+def test_cli_per_segment(tmp_path):
+    _segment_study(tmp_path)
+    r = CliRunner().invoke(main, ["correlate", str(tmp_path / "summary.csv"), str(tmp_path / "human.csv"),
+                                  "--results", str(tmp_path / "results.csv"), "--per-segment",
+                                  str(tmp_path / "per_sequence.csv"), "--no-figures", "--bootstrap", "100",
+                                  "-o", str(tmp_path / "c")])
+    assert r.exit_code == 0, r.output
+    t = pd.read_csv(tmp_path / "c" / "correlations_per_segment.csv")
+    assert set(t["segment"]) == {"g0", "g1", "g2", "g3", "(mean)"} and "mean rho 0.500 over 4 segments" in r.output
+    r = CliRunner().invoke(main, ["correlate", str(tmp_path / "summary.csv"), str(tmp_path / "human.csv"),
+                                  "--per-segment", str(tmp_path / "per_sequence.csv"), "-o", str(tmp_path / "d")])
+    assert r.exit_code != 0 and "--per-segment needs --results" in r.output

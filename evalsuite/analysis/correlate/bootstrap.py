@@ -34,7 +34,7 @@ from evalsuite.analysis.likert import participant_scores, statement_matrix
 from evalsuite.analysis.pairwise import is_mismatch
 from evalsuite.analysis.ranking import PLAIN_WEIGHTS, bradley_terry, to_elo, win_counts, win_matrices
 
-__all__ = ["condition_bootstrap", "ParticipantResampler"]
+__all__ = ["condition_bootstrap", "two_level_bootstrap", "ParticipantResampler"]
 _CHUNK = 250
 
 
@@ -45,6 +45,21 @@ def condition_bootstrap(x, y, n_boot: int, seed: int, alpha: float = 0.05):
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     idx = np.random.default_rng(seed).integers(0, x.size, size=(n_boot, x.size))
     rho, tau = replicates(x[idx], y[idx])
+    return (*percentile(rho, alpha), *percentile(tau, alpha), int((~np.isfinite(rho)).sum()))
+
+
+def two_level_bootstrap(x, H, seed: int, alpha: float = 0.05):
+    """Percentile CIs of rho and tau-b resampling the conditions and the participants together.
+
+    ``x``: (n,) metric values of the conditions; ``H``: (R, n) the human measure of the same conditions on R
+    participant resamples (:meth:`ParticipantResampler.replicates`). Replicate r draws n conditions with
+    replacement (``idx_r``, ``numpy.random.default_rng([seed, 2])``, independent of the participant draw) and
+    correlates ``x[idx_r]`` with ``H[r, idx_r]``: a new set of systems rated by a new set of raters, so the
+    interval holds both sources of uncertainty. Returns ``(rho_lo, rho_hi, tau_lo, tau_hi, n_undefined)``."""
+    x, H = np.asarray(x, dtype=float), np.asarray(H, dtype=float)
+    R, n = H.shape
+    idx = np.random.default_rng([seed, 2]).integers(0, n, size=(R, n))
+    rho, tau = replicates(x[idx], np.take_along_axis(H, idx, axis=1))
     return (*percentile(rho, alpha), *percentile(tau, alpha), int((~np.isfinite(rho)).sum()))
 
 

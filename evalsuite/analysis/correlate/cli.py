@@ -69,6 +69,9 @@ def check_against_results(human, resampler, results_path) -> None:
               help="Only these metrics (default: all); for a condition,value SCORES file, the metric's name.")
 @click.option("--results", "results", type=click.Path(dir_okay=False, path_type=pathlib.Path), default=None,
               help="The study's results.csv (or battles CSV): adds CIs from resampling participants.")
+@click.option("--per-segment", "per_sequence", type=click.Path(dir_okay=False, path_type=pathlib.Path), default=None,
+              help="per_sequence.csv of `evalsuite score` (needs --results): also correlate the metrics with the "
+                   "human measure segment by segment (correlations_per_segment.csv, mean over segments with a CI).")
 @click.option("--bootstrap", "n_boot", type=click.IntRange(0), default=1000, show_default=True,
               help="Bootstrap resamples (conditions; participants with --results); 0 = no CIs.")
 @click.option("--seed", type=int, default=42, show_default=True, help="Seed of the bootstrap.")
@@ -90,7 +93,7 @@ def check_against_results(human, resampler, results_path) -> None:
 @click.option("-v", "--verbose", is_flag=True,
               help="Print every row's note; by default one line per kind of note (count and examples), all of "
                    "them in OUT/notes.csv.")
-def correlate(scores, human, out_dir, measures, questions, metrics, results, n_boot, seed, alpha, renames, excluded,
+def correlate(scores, human, out_dir, measures, questions, metrics, results, per_sequence, n_boot, seed, alpha, renames, excluded,
               shared_only, human_lower_better, natural, mismatch_suffix, no_figures, verbose):
     """Correlate objective metrics (SCORES) with human judgements (HUMAN) across conditions.
 
@@ -148,6 +151,8 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
     s.attrs.update(path=str(scores), source="scores")
     h.attrs.update(path=str(human), source=source)
     resampler = None
+    if per_sequence is not None and results is None:
+        raise InputError("--per-segment needs --results (the judgements of each segment come from the results.csv)")
     if results is not None:
         opts = _analysis_options(human)
         resampler = ParticipantResampler.from_results(results, mismatch_suffix=mismatch_suffix, **opts)
@@ -159,6 +164,9 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
     for n in notes:
         click.echo(f"warning: {n}")
     write_outputs(table, s, h, out_dir, alpha=alpha, figures=not no_figures)
+    if per_sequence is not None and resampler is not None:
+        _write_per_segment(per_sequence, resampler.data, mapping, drop, out_dir, n_boot=n_boot, seed=seed,
+                           alpha=alpha, mismatch_suffix=mismatch_suffix)
     shown = display_table(table, alpha)
     cols = [c for c in shown.columns if c not in ("p (rho)", "p (tau_b)", "p from", "note")]
     widths = {c: max(len(c), *(len(str(v)) for v in shown[c])) for c in cols}
@@ -176,3 +184,28 @@ def correlate(scores, human, out_dir, measures, questions, metrics, results, n_b
         click.echo(f"All {len(row_notes)} notes: {notes_file}")
     click.echo(f"Wrote {out_dir / 'correlations.csv'} (.md, .tex)" + ("" if no_figures else " and figures/"))
 
+
+
+def _write_per_segment(path, results, mapping, drop, out_dir, *, n_boot, seed, alpha, mismatch_suffix):
+    import pandas as pd
+
+    from evalsuite.analysis.correlate.segments import human_by_segment, per_segment
+
+    seq = pd.read_csv(path, dtype=str, keep_default_na=False)
+    missing = [c for c in ("condition", "sequence", "metric", "value") if c not in seq.columns]
+    if missing:
+        raise InputError(f"missing column(s) {', '.join(missing)}; expected the per_sequence.csv of `evalsuite score` "
+                         "(condition, sequence, metric, value)", path=path, line=1)
+    seq["condition"] = seq["condition"].map(lambda c: mapping.get(c, c))
+    seq = seq[~seq["condition"].isin(drop)]
+    table = per_segment(seq, human_by_segment(results, mismatch_suffix), n_boot=n_boot, seed=seed, alpha=alpha)
+    if table.empty:
+        raise InputError("no segment has both per-sequence metric values and judgements of 3 or more conditions "
+                         "(the sequence names of per_sequence.csv must be the segment ids of the results)", path=path)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out_dir / "correlations_per_segment.csv", index=False)
+    means = table[table["segment"] == "(mean)"]
+    for _, r in means.iterrows():
+        click.echo(f"per segment: {r['metric']} / {r['question']}: mean rho {r['spearman_rho']:.3f} over {r['n']} "
+                   f"segments [{r['spearman_ci_low']:.3f}, {r['spearman_ci_high']:.3f}]")
+    click.echo(f"Wrote {out_dir / 'correlations_per_segment.csv'}")

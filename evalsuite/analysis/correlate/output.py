@@ -82,10 +82,12 @@ def display_table(table: pd.DataFrame, alpha: float = 0.05, arrows: dict | None 
              f"rho {level} CI": _ci(r["spearman_ci_low"], r["spearman_ci_high"])}
         if part:
             d["rho CI (participants)"] = _ci(r["spearman_ci_low_participants"], r["spearman_ci_high_participants"])
+            d["rho CI (systems+raters)"] = _ci(r["spearman_ci_low_both"], r["spearman_ci_high_both"])
         d.update({"tau_b": _num(r["kendall_tau_b"]), "p (tau_b)": _p(r["kendall_p"]),
                   f"tau_b {level} CI": _ci(r["kendall_ci_low"], r["kendall_ci_high"])})
         if part:
             d["tau_b CI (participants)"] = _ci(r["kendall_ci_low_participants"], r["kendall_ci_high_participants"])
+            d["tau_b CI (systems+raters)"] = _ci(r["kendall_ci_low_both"], r["kendall_ci_high_both"])
         d["agrees"] = {True: "yes", False: "no"}.get(r["agrees"], report.DASH)
         d["p from"] = _p_from(r["spearman_p_method"], r["kendall_p_method"])
         d["note"] = r["note"]

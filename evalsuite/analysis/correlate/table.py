@@ -1,8 +1,9 @@
 """The ``correlations.csv`` table: every metric against every human measure across conditions.
 
 One row per metric and human measure (columns :data:`COLUMNS`): n, rho and tau-b with their p-values
-(:mod:`~evalsuite.analysis.correlate.statistics`), condition and participant bootstrap CIs
-(:mod:`~evalsuite.analysis.correlate.bootstrap`), the metric's direction and whether the sign agrees with it;
+(:mod:`~evalsuite.analysis.correlate.statistics`), condition, participant and two-level (conditions and
+participants together, ``*_both``) bootstrap CIs (:mod:`~evalsuite.analysis.correlate.bootstrap`), the
+metric's direction and whether the sign agrees with it;
 an undefined correlation gives a row with empty numbers and a ``note``.
 """
 from __future__ import annotations
@@ -13,7 +14,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from evalsuite.analysis.correlate.bootstrap import condition_bootstrap
+from evalsuite.analysis.correlate.bootstrap import condition_bootstrap, two_level_bootstrap
 from evalsuite.analysis.correlate.statistics import percentile, rank_p_values, replicates
 from evalsuite.errors import InputError
 
@@ -24,7 +25,8 @@ COLUMNS = ["metric", "human_measure", "n", "spearman_rho", "spearman_p", "spearm
            "kendall_tau_b", "kendall_p", "kendall_ci_low", "kendall_ci_high", "question", "measure", "better",
            "agrees", "spearman_ci_low_participants", "spearman_ci_high_participants",
            "kendall_ci_low_participants", "kendall_ci_high_participants", "conditions", "note",
-           "spearman_p_method", "kendall_p_method"]
+           "spearman_p_method", "kendall_p_method", "spearman_ci_low_both", "spearman_ci_high_both",
+           "kendall_ci_low_both", "kendall_ci_high_both"]
 MIN_CONDITIONS = 3
 
 
@@ -215,6 +217,14 @@ def _row(metric, question, measure, svals, hvals, shared, better, *, n_boot, see
                 if bad:
                     notes.append(("participant resamples without a correlation",
                                   f"{bad} of {n_boot} participant resamples without a correlation, left out"))
+                (row["spearman_ci_low_both"], row["spearman_ci_high_both"], row["kendall_ci_low_both"],
+                 row["kendall_ci_high_both"], bad) = two_level_bootstrap(x, H, seed, alpha)
+                _snap(row, "spearman_rho", "spearman_ci_low_both", "spearman_ci_high_both")
+                _snap(row, "kendall_tau_b", "kendall_ci_low_both", "kendall_ci_high_both")
+                if bad:
+                    notes.append(("two-level resamples without a correlation",
+                                  f"{bad} of {n_boot} condition+participant resamples without a correlation, "
+                                  "left out"))
     if better == "closer to natural" and math.isfinite(row["spearman_rho"]):
         notes.append(("no expected sign", "closer to natural is better: no expected sign"))
     row["note"] = "; ".join(text for _, text in notes)
