@@ -32,6 +32,7 @@ COMMANDS = {
     "validate-metrics": "evalsuite.validity.cli:validate_metrics",
     "correlate": "evalsuite.analysis.correlate.cli:correlate",
     "import-judgements": "evalsuite.analysis.importers.cli:import_judgements_command",
+    "critic": "evalsuite.critic.cli:critic",
     "validate-submission": "evalsuite.leaderboard.submission_cli:validate_submission_command",
 }
 

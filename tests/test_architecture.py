@@ -15,7 +15,7 @@ LAYERS = [
     {"evalsuite.motion"},
     {"evalsuite.corpus"},
     {"evalsuite.metrics", "evalsuite.features"},
-    {"evalsuite.synth", "evalsuite.learned", "evalsuite.analysis", "renderers"},
+    {"evalsuite.synth", "evalsuite.learned", "evalsuite.analysis", "renderers", "evalsuite.critic"},
     {"evalsuite.generators", "study_app", "evalsuite.leaderboard"},
     {"evalsuite.cli", "evalsuite.demo", "evalsuite.pipeline", "evalsuite.score_command", "evalsuite.validity",
      "evalsuite.__main__", "evalsuite"},
