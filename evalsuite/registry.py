@@ -12,6 +12,8 @@ corpus layouts         ``evalsuite.corpus_layouts``     a ``Layout``, or a ``@re
 transcript formats     ``evalsuite.transcript_formats`` a ``TranscriptFormat``
 feature recipes        ``evalsuite.feature_recipes``    a ``Recipe``
 motion formats         ``evalsuite.motion_formats``     a ``MotionFormat``
+judgement importers    ``evalsuite.judgement_formats``  an ``Importer`` (:mod:`evalsuite.analysis.importers`)
+critic encoders        ``evalsuite.critic_encoders``    an ``Encoder`` (:mod:`evalsuite.critic`)
 =====================  ===============================  ==================================================
 
 A :class:`Registry` maps a name to an item and is a read-only ``Mapping``:

@@ -1,7 +1,7 @@
 """Human judgements from other tools as evalsuite's ``results.csv``: ``evalsuite import-judgements``.
 
 Every source is an :class:`Importer` in the :data:`IMPORTERS` registry (entry-point group
-``evalsuite.judgement_importers``, so a plug-in can add its own); each turns one file into a DataFrame with the
+``evalsuite.judgement_formats``, so a plug-in can add its own); each turns one file into a DataFrame with the
 ``results.csv`` columns (:data:`evalsuite.contracts.results.COLUMNS`) that ``evalsuite analyze`` and
 ``evalsuite correlate --results`` read. The built-in sources (formats: ``docs/human-data.md``):
 
@@ -36,7 +36,7 @@ class Importer:
     read: Callable[..., pd.DataFrame]
 
 
-IMPORTERS: Registry[Importer] = Registry("judgement format", "evalsuite.judgement_importers", base=Importer,
+IMPORTERS: Registry[Importer] = Registry("judgement format", "evalsuite.judgement_formats", base=Importer,
                                          name_of=lambda imp: imp.name, field="format")
 for _name, _target in (("battles", "evalsuite.analysis.importers.battles:BATTLES"),
                        ("genea-ratings", "evalsuite.analysis.importers.genea:RATINGS"),
