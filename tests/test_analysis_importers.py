@@ -63,7 +63,7 @@ def test_genea_pairwise_levels_words_and_mismatch(tmp_path):
 
 
 HEMVIP = [
-    {"userId": "u1", "trials": [
+    {"_id": "64b0", "userId": "u1", "testId": "genea2022_hl", "trials": [
         {"id": "seg1", "type": "video", "responses": [{"stimulus": "SA", "score": 70}, {"stimulus": "SB", "score": 20},
                                                        {"stimulus": "attn_check_55", "score": 55}]},
         {"id": "seg2", "type": "videopc", "responses": [{"stimulus": "SA", "score": -2}, {"stimulus": "SB", "score": 2}]},
@@ -82,6 +82,7 @@ def test_hemvip_export(tmp_path):
     pw = df[df["page_type"] == "pairwise"]
     assert list(pw["participant"]) == ["u1", "u2"]          # the broken report (99) left out
     assert list(pw["answer"]) == ["b", "tie"] and list(pw["strength"]) == ["strong", ""]
+    assert set(df["study"]) == {"genea2022_hl"}          # the export's testId
 
 
 def test_hemvip_errors(tmp_path):

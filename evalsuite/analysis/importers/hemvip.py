@@ -5,7 +5,8 @@ page; HEMVIP names it after the speech segment), a ``type`` and ``responses`` ``
 (the stimulus keys are the condition ids). Its export is a JSON list of such objects, or of database records
 that hold one under ``sessionJSON`` (object or JSON text); one object alone is read too. The participant is
 ``userId`` (added by HEMVIP's server), else the ``participant.response`` answer to a question named ``id`` or
-``name``, else the session's position in the file.
+``name``, else the session's position in the file. The study id is ``study=``, else the first session's
+``testId``, else the file's name.
 
 - rating pages (``video``, ``mushra``): one ``mushra`` row per stimulus, the 0-100 score;
 - pairwise pages (``videopc``, ``pairwise``): one ``pairwise`` row; the first response's score is the
@@ -76,7 +77,8 @@ def read(path, *, study: str | None = None, question: str | None = None) -> pd.D
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         fail(f"not JSON ({exc}); expected a HEMVIP JSON export", path)
     records: list[dict] = []
-    for i, session in enumerate(_sessions(data, path)):
+    sessions = _sessions(data, path)
+    for i, session in enumerate(sessions):
         who = _participant(session, i)
         sid = f"{who}#{i + 1}"
         q = question or str(session.get("question", "") or "") or "human-likeness"
@@ -117,7 +119,8 @@ def read(path, *, study: str | None = None, question: str | None = None) -> pd.D
     if not records:
         fail("no rating or pairwise pages with answers in the export", path)
     table = pd.DataFrame(records).fillna("")
-    return rows(len(table), study or path.stem, **{c: table[c].to_numpy() for c in table.columns})
+    test_id = str(sessions[0].get("testId") or "")
+    return rows(len(table), study or test_id or path.stem, **{c: table[c].to_numpy() for c in table.columns})
 
 
 HEMVIP = Importer("hemvip", "HEMVIP (webMUSHRA) session JSON export", read)
