@@ -89,3 +89,28 @@ def test_critic_trains_on_an_evalsuite_results_export(tmp_path):
     assert r.exit_code == 0, r.output
     assert "90 decided votes" in r.output and "held out by rater  critic" in r.output
     assert "fd_natural" not in r.output          # no --natural: no baseline rows
+
+
+def test_critic_with_the_fgd_encoder(tmp_path):
+    """The FGD encoder as the frozen encoder: the baseline is then FGD itself, on the same held-out votes."""
+    from learned_helpers import natural, trained
+
+    from evalsuite.motion.io import save_motion
+
+    model = trained()
+    model.save(tmp_path / "fgd.pt")
+    rng = np.random.default_rng(0)
+    pieces = list(natural().values())[:4]
+    for s, m in enumerate(pieces):
+        for c, amp in JITTER.items():
+            (tmp_path / "motion" / c).mkdir(parents=True, exist_ok=True)
+            noisy = m.with_values(m.values + 200 * amp * rng.standard_normal(m.values.shape))
+            save_motion(noisy, tmp_path / "motion" / c / f"seg{s}.bvh")
+    _votes(tmp_path / "battles.csv", n_raters=12, n_segments=4)
+    r = CliRunner().invoke(main, ["critic", "train", str(tmp_path / "battles.csv"), "--motion", str(tmp_path / "motion"),
+                                  "--encoder", "fgd", "--fgd-model", str(tmp_path / "fgd.pt"), "--natural", "NA",
+                                  "--folds", "3", "--bootstrap", "200", "-o", str(tmp_path / "c")])
+    assert r.exit_code == 0, r.output
+    t = pd.read_csv(tmp_path / "c" / "agreement.csv").set_index(["split", "scorer"])
+    assert set(t.index) == {(s, k) for s in ("rater", "system") for k in ("critic", "fd_natural")}
+    assert t.loc[("rater", "critic"), "ci_low"] > 0.5
