@@ -114,3 +114,38 @@ def test_critic_with_the_fgd_encoder(tmp_path):
     t = pd.read_csv(tmp_path / "c" / "agreement.csv").set_index(["split", "scorer"])
     assert set(t.index) == {(s, k) for s in ("rater", "system") for k in ("critic", "fd_natural")}
     assert t.loc[("rater", "critic"), "ci_low"] > 0.5
+
+
+def test_critic_runs_on_a_simulated_study_export(tmp_path):
+    """End to end on an evalsuite study export (the analysis simulate module's results.csv)."""
+    from evalsuite.analysis.simulate import simulate_results
+
+    simulate_results().to_csv(tmp_path / "results.csv", index=False)
+    rng = np.random.default_rng(0)
+    t = np.arange(600) / 30.0
+    amp = {"NA": 0.0, "SysA": 0.005, "SysB": 0.01, "BL": 0.03}
+    for seg in ("seg00", "seg01", "seg02", "seg_check"):
+        base = 0.2 * np.sin(2 * np.pi * 0.7 * t[:, None, None] + rng.uniform(0, 6, size=(4, 3)))
+        for c, a in amp.items():
+            (tmp_path / "motion" / c).mkdir(parents=True, exist_ok=True)
+            np.save(tmp_path / "motion" / c / f"{seg}.npy", base + a * rng.standard_normal(base.shape))
+    args = ["critic", "train", str(tmp_path / "results.csv"), "--motion", str(tmp_path / "motion"), "--natural", "NA",
+            "--folds", "3", "--bootstrap", "100", "-o", str(tmp_path / "c")]
+    r = CliRunner().invoke(main, [*args, "--question", "human_likeness"])
+    assert r.exit_code == 0, r.output
+    assert "from 12 raters on 4 conditions" in r.output     # mismatch pages, training and checks left out
+    table = pd.read_csv(tmp_path / "c" / "agreement.csv")
+    assert set(table["split"]) == {"rater", "system"} and set(table["scorer"]) == {"critic", "fd_natural"}
+    assert ((table["ci_low"] <= table["agreement"]) & (table["agreement"] <= table["ci_high"])).all()
+
+
+def test_load_votes_needs_one_question(tmp_path):
+    from evalsuite.critic.core import load_votes
+    from evalsuite.errors import InputError
+
+    (tmp_path / "b.csv").write_text("participant,item,condition_a,condition_b,winner,question\n"
+                                    "p1,s1,A,B,a,hl\np1,s1,A,B,b,app\np2,s1,A,B:mismatched,a,app\n")
+    with pytest.raises(InputError, match="votes on several questions \\(app, hl\\): pick one with --question"):
+        load_votes(tmp_path / "b.csv")
+    v = load_votes(tmp_path / "b.csv", question="app")
+    assert list(v["answer"]) == ["b"]                  # the matched-vs-mismatched vote left out
