@@ -144,7 +144,7 @@ def test_load_votes_needs_one_question(tmp_path):
     from evalsuite.errors import InputError
 
     (tmp_path / "b.csv").write_text("participant,item,condition_a,condition_b,winner,question\n"
-                                    "p1,s1,A,B,a,hl\np1,s1,A,B,b,app\np2,s1,A,B:mismatched,a,app\n")
+                                    "p1,s1,A,B,a,hl\np1,s1,A,B,b,app\np2,s1,A,A:mismatched,a,app\n")
     with pytest.raises(InputError, match="votes on several questions \\(app, hl\\): pick one with --question"):
         load_votes(tmp_path / "b.csv")
     v = load_votes(tmp_path / "b.csv", question="app")
