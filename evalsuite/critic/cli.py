@@ -60,12 +60,12 @@ def train(votes, motion_dir, out_dir, encoder, fgd_model, natural, study, questi
     stimuli = sorted(set(zip(v["condition_a"], v["segment"])) | set(zip(v["condition_b"], v["segment"])))
     conds = sorted({c for c, _ in stimuli} | ({natural} if natural else set()))
     segments = sorted({s for _, s in stimuli})
+    voted = set(stimuli)
     feats, pooled = {}, {}
     for c in tqdm(conds, desc="encoding", unit="condition"):
-        per = [embed(find_motion(motion_dir, c, s)) for s in segments
-               if (c, s) in set(stimuli) or c == natural]
-        for s, f in zip([s for s in segments if (c, s) in set(stimuli) or c == natural], per):
-            feats[(c, s)] = f.mean(0)
+        mine = [s for s in segments if (c, s) in voted or c == natural]
+        per = [embed(find_motion(motion_dir, c, s)) for s in mine]
+        feats.update({(c, s): f.mean(0) for s, f in zip(mine, per)})
         pooled[c] = np.concatenate(per)
     table = evaluate(v, feats, pooled, natural, folds=folds, n_boot=n_boot, seed=seed, l2=l2)
     decided = v[v["answer"] != "tie"]
