@@ -149,3 +149,18 @@ def test_load_votes_needs_one_question(tmp_path):
         load_votes(tmp_path / "b.csv")
     v = load_votes(tmp_path / "b.csv", question="app")
     assert list(v["answer"]) == ["b"]                  # the matched-vs-mismatched vote left out
+
+
+def test_critic_without_torch(tmp_path):
+    """The kinematic critic needs numpy only; the fgd encoder without torch names the extra, no traceback."""
+    from test_learned_optional import HINT, _run
+
+    _motions(tmp_path / "motion", n_segments=2)
+    _votes(tmp_path / "battles.csv", n_raters=6, n_segments=2)
+    cli = "from evalsuite.cli import main; main()"
+    r = _run(tmp_path, cli, "critic", "train", "battles.csv", "--motion", "motion", "--folds", "3", "--bootstrap", "50")
+    assert r.returncode == 0, r.stderr
+    assert "held out by rater" in r.stdout
+    r = _run(tmp_path, cli, "critic", "train", "battles.csv", "--motion", "motion", "--encoder", "fgd",
+             "--fgd-model", "x.pt")
+    assert r.returncode == 1 and HINT in r.stderr and "Traceback" not in r.stderr
