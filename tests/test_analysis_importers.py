@@ -35,6 +35,9 @@ def test_genea_ratings(tmp_path):
     assert list(df["condition"]) == ["SA", "NA", "SA"]
     assert set(df["question"]) == {"human-likeness"} and set(df["study"]) == {"g23"}
     assert df.loc[0, "page"] == df.loc[1, "page"] != df.loc[2, "page"]   # rated together on one screen
+    df = _roundtrip(tmp_path, "genea-ratings", "q.csv", "rater,system,segment,rating,question\n"
+                    "r1,SA,s1,80,appropriateness\nr1,SB,s1,20,\n")
+    assert list(df["question"]) == ["appropriateness", "human-likeness"]     # an empty cell takes the default
 
 
 def test_genea_ratings_errors(tmp_path):

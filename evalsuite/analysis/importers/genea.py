@@ -38,7 +38,8 @@ def read_ratings(path, *, study: str | None = None, question: str | None = None)
     if bad.any():
         row = df[bad].iloc[0]
         fail(f"invalid rating {row['rating']!r}; expected a number in 0..100", path, int(row["line"]), "rating")
-    q = df["question"] if "question" in df.columns else (question or "human-likeness")
+    q = df["question"].replace("", question or "human-likeness") if "question" in df.columns else (
+        question or "human-likeness")
     page = df["page"] if "page" in df.columns else df["participant"] + "/" + df["segment"]
     return rows(len(df), study or path.stem, participant=df["participant"].to_numpy(), page=page.to_numpy(),
                 page_type="mushra",
@@ -84,7 +85,8 @@ def read_pairwise(path, *, study: str | None = None, question: str | None = None
              "mismatched one with a 'mismatched' column)", path, int(row["line"]), "condition_b")
     answer = np.where(pref > 0, "a", np.where(pref < 0, "b", "tie"))
     strength = np.where(np.abs(pref) == 2, "strong", np.where(np.abs(pref) == 1, "weak", ""))
-    q = df["question"].to_numpy() if "question" in df.columns else (question or "preference")
+    q = (df["question"].replace("", question or "preference").to_numpy() if "question" in df.columns
+         else (question or "preference"))
     return rows(len(df), study or path.stem, participant=df["participant"].to_numpy(),
                 page=(df["participant"] + "/" + df["segment"] + "/" + df.index.astype(str)).to_numpy(),
                 page_type="pairwise", question=q, segment=df["segment"].to_numpy(), condition_a=a.to_numpy(),
