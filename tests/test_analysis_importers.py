@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 
+import pandas as pd
 import pytest
 from click.testing import CliRunner
 
@@ -122,3 +123,27 @@ def test_registry_takes_a_plugin(tmp_path):
         assert list(import_judgements("test-ratings", src)["answer"]) == ["80"]
     finally:
         IMPORTERS.unregister("test-ratings")
+
+
+def test_imported_ratings_go_through_analyze_and_correlate(tmp_path):
+    from evalsuite.cli import main
+
+    lines = ["rater,system,segment,rating"]
+    for r in range(6):
+        for s in range(3):
+            for i, c in enumerate(["SA", "SB", "SC", "NA"]):
+                lines.append(f"r{r},{c},seg{s},{min(100, 15 + 20 * i + (r + s) % 5)}")
+    (tmp_path / "hl.csv").write_text("\n".join(lines) + "\n")
+    run = CliRunner().invoke
+    assert run(main, ["import-judgements", "genea-ratings", str(tmp_path / "hl.csv"), "-o",
+                      str(tmp_path / "results.csv")]).exit_code == 0
+    r = run(main, ["analyze", str(tmp_path / "results.csv"), "-o", str(tmp_path / "an")])
+    assert r.exit_code == 0, r.output
+    (tmp_path / "scores.csv").write_text("condition,value\nSA,4\nSB,3\nSC,2\nNA,1\n")
+    r = run(main, ["correlate", str(tmp_path / "scores.csv"), str(tmp_path / "an" / "ratings.csv"), "--metric", "m",
+                   "--results", str(tmp_path / "results.csv"), "--measure", "mean", "--bootstrap", "100",
+                   "--no-figures", "-o", str(tmp_path / "c")])
+    assert r.exit_code == 0, r.output
+    row = pd.read_csv(tmp_path / "c" / "correlations.csv").iloc[0]
+    assert row["spearman_rho"] == -1.0 and row["n"] == 4
+    assert row["spearman_ci_low_both"] == -1.0 and -1.0 <= row["spearman_ci_high_both"] < 1   # systems+raters CI
