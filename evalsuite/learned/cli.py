@@ -172,6 +172,21 @@ def import_genea(checkpoint, stats, joints, out, fps, stride, window_rule, conve
     click.echo(f"wrote {out}; content hash {digest}")
 
 
+@fgd.command("import-emage")
+@click.argument("checkpoint", type=click.Path(exists=True, dir_okay=False, path_type=pathlib.Path))
+@click.option("-o", "--out", type=click.Path(dir_okay=False, path_type=pathlib.Path), required=True,
+              help="Model file to write (state dict, provenance and input convention).")
+def import_emage(checkpoint, out):
+    """Convert EMAGE's AESKConv_240_100.bin (the GENEA Leaderboard's FGD encoder) into an evalsuite model file.
+
+    Example: evalsuite fgd import-emage AESKConv_240_100.bin -o aeskconv.pt
+    """
+    from evalsuite.learned.emage_aeskconv import import_emage as run_import
+
+    run_import(checkpoint, out)
+    click.echo(f"wrote {out}")
+
+
 @fgd.command()
 @click.argument("model_path", type=click.Path(exists=True, dir_okay=False, path_type=pathlib.Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the full metadata as JSON.")
