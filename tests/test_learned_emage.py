@@ -97,7 +97,7 @@ def test_import_load_strict_and_forward_matches_numpy(tmp_path):
                                 ["import-emage", str(tmp_path / "AESKConv_240_100.bin"), "-o", str(tmp_path / "m.pt")])
     assert result.exit_code == 0, result.output
     model, meta = ea.load_emage_model(tmp_path / "m.pt")
-    assert meta["format"] == ea.EMAGE_FORMAT and len(meta["source_sha256"]) == 64 and "first two rows" in meta["input"]
+    assert len(meta["source_sha256"]) == 64 and "first two rows" in meta["input"]
     rng = np.random.default_rng(1)
     x = ea.axis_angle_to_rot6d(rng.normal(scale=0.5, size=(70, 165)))
     z = ea.aeskconv_latents(model, x)
@@ -133,3 +133,47 @@ def test_wrong_checkpoints_give_precise_errors(tmp_path):
         ea.import_emage(tmp_path / "c.bin", tmp_path / "o.pt")
     with pytest.raises(InputError, match="at least 32 frames"):
         ea.aeskconv_latents(ea.AESKConv().eval(), np.zeros((31, 330)))
+
+
+def test_score_uses_imported_model_on_smplx_motion(tmp_path):
+    from evalsuite.learned.fgd import score_fgd
+    from evalsuite.learned.modelfile import load_model
+    from evalsuite.motion import load_motion
+    from tests.smplx_helpers import write_fake_beat2_recording
+
+    random_checkpoint(tmp_path / "ck.bin")
+    ea.import_emage(tmp_path / "ck.bin", tmp_path / "m.pt")
+    model = load_model(tmp_path / "m.pt")
+    assert model.window == 32 and model.fps == 30.0 and len(model.content_hash) == 64
+    path = write_fake_beat2_recording(tmp_path / "a.npz", n_frames=75, seed=3)
+    motion = load_motion(path)
+    feats = model.features(motion)
+    direct = ea.aeskconv_latents(ea.load_emage_model(tmp_path / "m.pt")[0],
+                                 ea.axis_angle_to_rot6d(motion.smplx.poses))
+    assert feats.shape == (4, 240) and np.allclose(feats, direct)
+    with pytest.raises(InputError, match="expects 30 fps"):
+        model.features(load_motion(write_fake_beat2_recording(tmp_path / "b.npz", n_frames=75, fps=60)))
+    ref = {f"s{i}": load_motion(write_fake_beat2_recording(tmp_path / f"r{i}.npz", n_frames=320, seed=i))
+           for i in range(3)}
+    cond = {f"s{i}": load_motion(write_fake_beat2_recording(tmp_path / f"c{i}.npz", n_frames=320, seed=10 + i))
+            for i in range(3)}
+    rows = score_fgd(tmp_path / "m.pt", ref, {"same": ref, "other": cond}, raw=False, n_bootstrap=0)
+    by = {r["condition"]: r for r in rows if r["metric"] == "fgd"}
+    assert by["same"]["value"] == pytest.approx(0.0, abs=1e-6) and by["other"]["value"] > 0
+    assert by["other"]["n_windows_reference"] == 60 and by["other"]["model_hash"] == model.content_hash
+
+
+def test_fgd_score_command_reads_the_imported_model(tmp_path):
+    from evalsuite.learned.cli import fgd
+    from tests.smplx_helpers import write_fake_beat2_recording
+
+    random_checkpoint(tmp_path / "ck.bin")
+    ea.import_emage(tmp_path / "ck.bin", tmp_path / "m.pt")
+    for side, seed in (("nat", 0), ("sys", 10)):
+        (tmp_path / side).mkdir()
+        for i in range(3):
+            write_fake_beat2_recording(tmp_path / side / f"s{i}.npz", n_frames=96, seed=seed + i)
+    result = CliRunner().invoke(fgd, ["score", str(tmp_path / "m.pt"), str(tmp_path / "nat"), str(tmp_path / "sys"),
+                                      "--bootstrap", "0"])
+    assert result.exit_code == 0, result.output
+    assert "| sys | fgd |" in result.output

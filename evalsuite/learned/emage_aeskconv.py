@@ -271,19 +271,19 @@ def import_emage(checkpoint, out, source_note: str | None = None) -> AESKConv:
     state = state_from_checkpoint(obj, str(checkpoint))
     model = build_model(state)
     meta = {
-        "format": EMAGE_FORMAT, "version": 1, "architecture": "VAESKConv (EMAGE AESKConv_240)",
+        "architecture": "VAESKConv (EMAGE AESKConv_240)",
         "source_file": checkpoint.name, "source_sha256": hashlib.sha256(checkpoint.read_bytes()).hexdigest(),
         "source_note": source_note or "EMAGE emage_evaltools AESKConv_240_100.bin, downloaded by the user",
         "input": "6D rotations (first two rows of each joint's rotation matrix) of the 55 SMPL-X joints, "
                  "(T, 330) at 30 fps, T cut to a multiple of 32",
         "latent": f"(T/{DOWNSAMPLE}, {VAE_LENGTH}) per sequence", "fps": 30.0,
     }
-    torch.save({"meta": meta, "state_dict": state}, out)
+    torch.save({"format": EMAGE_FORMAT, "format_version": 1, "meta": meta, "state_dict": state}, out)
     return model
 
 
 def is_emage_model_file(obj) -> bool:
-    return isinstance(obj, dict) and isinstance(obj.get("meta"), dict) and obj["meta"].get("format") == EMAGE_FORMAT
+    return isinstance(obj, dict) and obj.get("format") == EMAGE_FORMAT and isinstance(obj.get("meta"), dict)
 
 
 def load_emage_model(path) -> tuple[AESKConv, dict]:

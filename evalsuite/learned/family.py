@@ -20,7 +20,7 @@ import numpy as np
 
 from evalsuite.errors import InputError
 from evalsuite.learned.fgd import FEATURE_UNIT, RAW_UNIT, RawReference, bootstrap_fd_samples
-from evalsuite.learned.modelfile import FeatureModel, load_model
+from evalsuite.learned.modelfile import AnyFeatureModel, load_model
 from evalsuite.learned.representation import needs_resampling
 from evalsuite.learned.sample_size import fgd_at_n, fgd_infinity
 from evalsuite.metrics.families import MetricFamily, MetricInfo, ReduceContext, SequenceContext
@@ -29,10 +29,10 @@ from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian
 
 __all__ = ["FGDFamily"]
 
-_MODELS: dict[tuple[str, float], FeatureModel] = {}   # per process: a worker loads each model once
+_MODELS: dict[tuple[str, float], AnyFeatureModel] = {}   # per process: a worker loads each model once
 
 
-def _model(path: str) -> FeatureModel:
+def _model(path: str) -> AnyFeatureModel:
     key = (path, pathlib.Path(path).stat().st_mtime)
     if key not in _MODELS:
         _MODELS[key] = load_model(path)

@@ -37,7 +37,7 @@ import torch
 from tqdm.auto import tqdm
 
 from evalsuite.errors import InputError
-from evalsuite.learned.modelfile import FeatureModel, load_model, torch_threads
+from evalsuite.learned.modelfile import AnyFeatureModel, FeatureModel, load_model, torch_threads
 from evalsuite.learned.representation import resampled_files
 from evalsuite.metrics.families.base import bootstrap_bias, centred_ci
 from evalsuite.metrics.frechet import FrechetWarning, frechet_distance, gaussian_stats
@@ -51,7 +51,7 @@ ROW_KEYS = ("condition", "metric", "value", "unit", "ci_low", "ci_high", "model_
 class WindowSet:
     """Windows of a set of sequences: per-sequence features and (optionally) raw normalised windows."""
 
-    def __init__(self, model: FeatureModel, motions: dict, *, raw: bool, label: str, stride: int | None = None):
+    def __init__(self, model: AnyFeatureModel, motions: dict, *, raw: bool, label: str, stride: int | None = None):
         if not motions:
             raise InputError(f"{label}: no sequences")
         self.names = sorted(motions)

@@ -31,6 +31,8 @@ import torch
 
 from evalsuite._version import __version__
 from evalsuite.errors import InputError
+from evalsuite.learned.emage_aeskconv import EMAGE_FORMAT, build_model, state_from_checkpoint
+from evalsuite.learned.emage_model import EmageFeatureModel
 from evalsuite.learned.network import LATENT_DIM, Architecture, EmbeddingNet
 from evalsuite.learned.representation import cut_windows, pose_vectors
 
@@ -219,8 +221,17 @@ def new_meta(arch: Architecture, representation: dict, fps: float, stride: int, 
     }
 
 
-def load_model(path) -> FeatureModel:
-    """Load a model file written by :meth:`FeatureModel.save`, checking its content hash."""
+AnyFeatureModel = FeatureModel | EmageFeatureModel
+
+
+def load_model(path) -> AnyFeatureModel:
+    """Load a model file written by :meth:`FeatureModel.save`, checking its content hash.
+
+    A file written by ``evalsuite fgd import-emage`` gives an :class:`EmageFeatureModel` (same interface for
+    the FGD family: windows, encode, fps, window, content_hash).
+    """
+    if isinstance(path, (FeatureModel, EmageFeatureModel)):
+        return path
     path = pathlib.Path(path)
     if not path.exists():
         raise InputError("no such model file", path=path)
@@ -229,6 +240,9 @@ def load_model(path) -> FeatureModel:
     except Exception as exc:  # torch raises many types for foreign or corrupt files
         raise InputError(f"not an evalsuite model file ({exc.__class__.__name__}: {str(exc)[:200]}); "
                          "GENEA checkpoints must be converted first: evalsuite fgd import-genea", path=path) from None
+    if isinstance(payload, dict) and payload.get("format") == EMAGE_FORMAT:
+        return EmageFeatureModel(build_model(state_from_checkpoint(payload["state_dict"], str(path))),
+                                 payload["meta"], payload["state_dict"])
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise InputError("not an evalsuite model file (no 'format' marker); GENEA checkpoints must be "
                          "converted first: evalsuite fgd import-genea", path=path)
