@@ -177,3 +177,14 @@ def test_fgd_score_command_reads_the_imported_model(tmp_path):
                                       "--bootstrap", "0"])
     assert result.exit_code == 0, result.output
     assert "| sys | fgd |" in result.output
+
+
+def test_pickled_checkpoint_needs_unsafe_pickle(tmp_path):
+    import argparse
+
+    state = random_checkpoint(tmp_path / "a.bin", prefix="")
+    torch.save({"model_state": state, "args": argparse.Namespace(vae_length=240)}, tmp_path / "p.bin")
+    with pytest.raises(InputError, match="--unsafe-pickle"):
+        ea.import_emage(tmp_path / "p.bin", tmp_path / "o.pt")
+    ea.import_emage(tmp_path / "p.bin", tmp_path / "o.pt", allow_pickle=True)
+    assert ea.load_emage_model(tmp_path / "o.pt")[1]["source_file"] == "p.bin"

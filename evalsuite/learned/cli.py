@@ -176,14 +176,17 @@ def import_genea(checkpoint, stats, joints, out, fps, stride, window_rule, conve
 @click.argument("checkpoint", type=click.Path(exists=True, dir_okay=False, path_type=pathlib.Path))
 @click.option("-o", "--out", type=click.Path(dir_okay=False, path_type=pathlib.Path), required=True,
               help="Model file to write (state dict, provenance and input convention).")
-def import_emage(checkpoint, out):
+@click.option("--unsafe-pickle", is_flag=True,
+              help="Allow pickled objects besides tensors in the checkpoint (if the plain read fails). Only for "
+                   "trusted files.")
+def import_emage(checkpoint, out, unsafe_pickle):
     """Convert EMAGE's AESKConv_240_100.bin (the GENEA Leaderboard's FGD encoder) into an evalsuite model file.
 
     Example: evalsuite fgd import-emage AESKConv_240_100.bin -o aeskconv.pt
     """
     from evalsuite.learned.emage_aeskconv import import_emage as run_import
 
-    run_import(checkpoint, out)
+    run_import(checkpoint, out, allow_pickle=unsafe_pickle)
     click.echo(f"wrote {out}")
 
 

@@ -261,13 +261,14 @@ def build_model(state: dict[str, torch.Tensor]) -> AESKConv:
     return model.eval()
 
 
-def import_emage(checkpoint, out, source_note: str | None = None) -> AESKConv:
+def import_emage(checkpoint, out, source_note: str | None = None, allow_pickle: bool = False) -> AESKConv:
     """Convert ``AESKConv_240_100.bin`` into an evalsuite model file (state dict + provenance + input convention)."""
     checkpoint = pathlib.Path(checkpoint)
     try:
-        obj = torch.load(checkpoint, map_location="cpu", weights_only=True)
+        obj = torch.load(checkpoint, map_location="cpu", weights_only=not allow_pickle)
     except Exception as exc:  # torch raises many types for a bad file
-        raise InputError(f"{checkpoint}: cannot be read as a torch checkpoint ({type(exc).__name__})") from None
+        hint = "" if allow_pickle else "; if it is a trusted file holding pickled objects, pass --unsafe-pickle"
+        raise InputError(f"{checkpoint}: cannot be read as a torch checkpoint ({type(exc).__name__}){hint}") from None
     state = state_from_checkpoint(obj, str(checkpoint))
     model = build_model(state)
     meta = {
