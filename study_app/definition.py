@@ -202,7 +202,7 @@ def load_study(path) -> Study:
         new_sessions_per_address=chk.int_range(data, "new_sessions_per_address", "", 0, 1_000_000, default=10),
         new_sessions_window_minutes=float(chk.int_range(data, "new_sessions_window_minutes", "", 1, 525_600,
                                                         default=60)),
-        playback_min_fraction=float(chk.get(data, "playback_min_fraction", "", (int, float), default=0.5)),
+        playback_min_fraction=float(chk.get(data, "playback_min_fraction", "", (int, float), default=1.0)),
         sha256=hashlib.sha256(raw).hexdigest(),
     )
     if not 0 <= study.playback_min_fraction <= 1:

@@ -42,7 +42,9 @@ def playback_of(study: Study, page: dict, ans, dump: dict) -> PlaybackCheck | No
         files = [kind.media(study, page, k).file for k in range(n)]
         seconds = [media_seconds(study, f) if f else None for f in files]
     return check_playback(n, dump.get("media_requests", {}).get((ans.session_id, ans.page_index), set()),
-                          seconds, ans.rt_ms, study.playback_min_fraction, study.require_full_playback)
+                          seconds, ans.rt_ms, study.playback_min_fraction, study.require_full_playback,
+                          dump.get("media_served", {}).get((ans.session_id, ans.page_index), {})
+                          if "media_served" in dump else None)
 
 
 def result_rows(study: Study, dump: dict) -> list[dict]:
@@ -66,6 +68,7 @@ def result_rows(study: Study, dump: dict) -> list[dict]:
                 "shown_at": _iso(ans.shown_at), "answered_at": _iso(ans.answered_at)}
         check = playback_of(study, page, ans, dump)
         base["playback_implausible"] = "" if check is None else int(check.implausible)
+        base["playback_reason"] = "" if check is None else "; ".join(check.reasons)
         rows.extend(kind.export_rows(study, page, ans, base))
     for r in rows:
         for c in COLUMNS:
@@ -88,7 +91,8 @@ def _playback_json(study: Study, ans, dump: dict, sessions: dict) -> dict | None
     check = playback_of(study, plan.pages[ans.page_index], ans, dump) if plan is not None else None
     if check is None:
         return None
-    return {"implausible": check.implausible, "not_requested": list(check.not_requested), "min_ms": check.min_ms}
+    return {"implausible": check.implausible, "not_requested": list(check.not_requested), "min_ms": check.min_ms,
+            "reasons": list(check.reasons)}
 
 
 def raw_json_chunks(study: Study, dump: dict) -> Iterator[str]:

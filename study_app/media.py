@@ -16,6 +16,7 @@ from flask import Blueprint, Response, abort, current_app, request, send_from_di
 from study_app.context import get_store, get_study
 from study_app.pages import get_kind
 from study_app.participant import _own
+from study_app.served import record_served
 
 bp = Blueprint("media", __name__)
 
@@ -44,7 +45,10 @@ def video(sid, index, slot):
         # generated media (e.g. headphone-check tones), with byte ranges as for the videos
         resp = Response(media.body, mimetype=media.mimetype)
         resp.headers["Cache-Control"] = "private, no-store"
-        return resp.make_conditional(request, accept_ranges=True, complete_length=len(media.body))
+        resp = resp.make_conditional(request, accept_ranges=True, complete_length=len(media.body))
+        if request.method == "GET":
+            record_served(store, sid, index, slot, resp)
+        return resp
     if media.file not in study.manifest.by_file():
         abort(404)
     resp = send_from_directory(study.manifest.root, media.file, mimetype=media.mimetype, conditional=True,
@@ -54,4 +58,6 @@ def video(sid, index, slot):
     resp.headers.pop("Content-Disposition", None)
     resp.headers.pop("Last-Modified", None)
     resp.headers["Cache-Control"] = "private, no-store"
+    if request.method == "GET":
+        record_served(store, sid, index, slot, resp)      # the bytes this response sends (study_app.served)
     return resp

@@ -83,7 +83,7 @@ class Study:
     new_sessions_per_address: int = 10
     new_sessions_window_minutes: float = 60.0
     # A page is flagged when its time is below this fraction of its longest clip (study_app.playback).
-    playback_min_fraction: float = 0.5
+    playback_min_fraction: float = 1.0
     sha256: str = ""
     # outcome -> study_app.outcomes.OutcomeCode (code and review action per way a session ends)
     outcomes: dict = field(default_factory=dict)

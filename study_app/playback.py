@@ -5,7 +5,8 @@ can send those events without playing anything. The server therefore keeps its o
 route notes which slots of a page the session requested (``media_requests``), and the time on the page
 (first view to answer, measured by the server) is compared with the clips' durations. A page is
 **implausible** when a slot was never requested, or (with ``require_full_playback``) when the time on the
-page is shorter than ``playback_min_fraction`` of its longest clip. Such pages are flagged in the export
+page is shorter than ``playback_min_fraction`` (default 1) of its longest clip, or when the bytes the
+server sent for a slot (:mod:`study_app.served`) do not cover its whole file. Such pages are flagged in the export
 (``playback_implausible``), never refused: the researcher decides (``evalsuite analyze`` can exclude on it).
 
 Durations come from the manifest's ``duration_s`` column when present, otherwise from the file itself
@@ -29,16 +30,31 @@ class PlaybackCheck:
     implausible: bool
     not_requested: tuple[int, ...] = ()      # slots the session never fetched
     min_ms: int | None = None                 # the least plausible time on the page (None: durations unknown)
+    reasons: tuple[str, ...] = ()            # why it is implausible, one plain sentence each
 
 
 def check_playback(n_slots: int, requested: set[int], seconds: list[float | None], rt_ms: int,
-                   min_fraction: float, full_playback: bool) -> PlaybackCheck:
-    """Judge one answered page with ``n_slots`` media slots (see the module docstring)."""
+                   min_fraction: float, full_playback: bool,
+                   served: dict[int, tuple[int, int]] | None = None) -> PlaybackCheck:
+    """Judge one answered page with ``n_slots`` media slots (see the module docstring).
+
+    ``served`` maps a slot to (distinct bytes sent, file length); None skips the byte check (no record).
+    """
     missing = tuple(k for k in range(n_slots) if k not in requested)
+    reasons = [f"unwatched: slot {k} never fetched" for k in missing]
+    if served is not None:
+        for k in range(n_slots):
+            got, total = served.get(k, (0, 0))
+            if k not in missing and (total == 0 or got < total):
+                reasons.append(f"unwatched: bytes {got:,}/{total:,} served")
+        if full_playback and len(reasons) > len(missing):
+            # the answer was unlocked by "ended" events for every video, which the bytes contradict
+            reasons.append("playback events inconsistent with served bytes")
     known = [s for s in seconds if s is not None]
     min_ms = int(1000 * min_fraction * max(known)) if known and full_playback and min_fraction > 0 else None
-    too_fast = min_ms is not None and rt_ms < min_ms
-    return PlaybackCheck(implausible=bool(missing) or too_fast, not_requested=missing, min_ms=min_ms)
+    if min_ms is not None and rt_ms < min_ms:
+        reasons.append(f"answered {rt_ms / 1000:.1f} s after the page for {max(known):.1f} s of video")
+    return PlaybackCheck(implausible=bool(reasons), not_requested=missing, min_ms=min_ms, reasons=tuple(reasons))
 
 
 def media_seconds(study, file: str) -> float | None:

@@ -167,10 +167,13 @@ def apply_exclusions(df: pd.DataFrame, *, attention_fails: int = 2, keep_incompl
     flagged = df[pb == "1"].groupby(["participant", "session"], sort=False)["page"].nunique()
     judged = df[pb != ""].groupby("session")["page"].nunique()
     if implausible_playback:
+        why = df["playback_reason"] if "playback_reason" in df.columns else pd.Series("", index=df.index)
         for (part, sess), n in flagged[flagged >= implausible_playback].items():
+            said = [r for r in why[(pb == "1") & (df["session"] == sess)].astype(str).unique() if r]
             records.append((part, sess, "implausible_playback",
                             f"{n} of {judged[sess]} pages with media answered without fetching every video or "
-                            f"faster than its clips last (limit: {implausible_playback})"))
+                            f"faster than its clips last (limit: {implausible_playback})"
+                            + (f", e.g. {said[0]}" if said else "")))
 
     table = pd.DataFrame(records, columns=EXCLUSION_COLUMNS)
     order = {s: i for i, s in enumerate(sessions["session"])}

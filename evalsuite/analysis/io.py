@@ -285,6 +285,7 @@ def read_battles(path) -> pd.DataFrame:
         "attention_expected": "",
         "attention_passed": "",
         "playback_implausible": "",
+        "playback_reason": "",
         "shown_at": "",
         "answered_at": "",
         "value": np.nan,

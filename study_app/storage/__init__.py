@@ -27,6 +27,7 @@ from study_app.storage.tables import (
     Entry,
     Event,
     MediaRequest,
+    MediaServed,
     PageView,
     ParticipantSession,
     Plan,
@@ -37,5 +38,5 @@ from study_app.storage.tables import (
 )
 
 __all__ = ["make_engine", "init_db", "Store", "SubmitStatus", "EventLog", "PLAYBACK_KINDS", "utcnow", "Base",
-           "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event", "MediaRequest", "Entry",
+           "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event", "MediaRequest", "MediaServed", "Entry",
            "AdminLogout", "SessionMark", "StudyFlag"]

@@ -14,6 +14,7 @@ from sqlalchemy.orm import sessionmaker
 from study_app.errors import StudyStateError
 from study_app.media_log import MediaLog
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
+from study_app.served import served_by_page
 from study_app.storage.events import EventLog, add_events, slots_with
 from study_app.storage.tables import Answer, Entry, Event, MediaRequest, PageView, ParticipantSession, Plan, utcnow
 
@@ -235,8 +236,7 @@ class Store:
         raise RuntimeError("could not store the events")
 
     def record_media_request(self, session_id: str, page_index: int, slot: int) -> None:
-        """Note that the session fetched this media slot (:class:`study_app.media_log.MediaLog`: once, without
-        waiting for the disk or, on SQLite, for the write lock)."""
+        """Note that the session fetched this media slot once (:class:`study_app.media_log.MediaLog`)."""
         self.media_log.record(session_id, page_index, slot, utcnow())
 
     def submit(self, session_id: str, page_index: int, token: str, validate):
@@ -326,8 +326,8 @@ class Store:
     def dump(self, study_id: str) -> dict:
         """Sessions, plans and answers of a study. The interaction log is not loaded: ``events`` is an
         :class:`EventLog` that streams it from the database when iterated (raw JSON export), and
-        ``event_counts`` the number of events per session, counted in SQL; ``media_requests`` maps
-        (session, page index) to the media slots the session fetched."""
+        ``event_counts`` the number of events per session; ``media_requests`` and ``media_served`` (slot → bytes
+        sent, file length) per (session, page index)."""
         self.media_log.flush()
         with self.ReadSession() as db:
             sessions = db.scalars(select(ParticipantSession).where(
@@ -345,6 +345,6 @@ class Store:
                     select(MediaRequest.session_id, MediaRequest.page_index, MediaRequest.slot)
                     .join(ParticipantSession, MediaRequest.session_id == ParticipantSession.id).where(of_study)):
                 requested.setdefault((sid, index), set()).add(slot)
-            return {"sessions": sessions, "plans": plans, "answers": answers,
+            return {"sessions": sessions, "plans": plans, "answers": answers, "media_served": served_by_page(db, study_id),
                     "events": EventLog(self.ReadSession, study_id), "event_counts": counts, "media_requests": requested}
 

@@ -12,7 +12,7 @@ from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Integer, Stri
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 __all__ = ["utcnow", "Base", "StudyRecord", "Plan", "ParticipantSession", "Answer", "PageView", "Event",
-           "MediaRequest", "Entry", "AdminLogout",
+           "MediaRequest", "MediaServed", "Entry", "AdminLogout",
            "SessionMark", "StudyFlag"]
 
 
@@ -121,6 +121,21 @@ class MediaRequest(Base):
     page_index: Mapped[int] = mapped_column(Integer)
     slot: Mapped[int] = mapped_column(Integer)
     first_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class MediaServed(Base):
+    """One media response with a body: the byte range the server sent (inclusive), the file's length and
+    when (:mod:`study_app.served`)."""
+    __tablename__ = "media_served"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id"), index=True)
+    page_index: Mapped[int] = mapped_column(Integer)
+    slot: Mapped[int] = mapped_column(Integer)
+    first_byte: Mapped[int] = mapped_column(Integer)
+    last_byte: Mapped[int] = mapped_column(Integer)
+    total: Mapped[int] = mapped_column(Integer)
+    status: Mapped[int] = mapped_column(Integer)
+    served_at: Mapped[dt.datetime] = mapped_column(DateTime, default=utcnow)
 
 
 class Entry(Base):
