@@ -263,6 +263,10 @@ def test_participant_journey_in_chromium(env):
     keys = h.as_keys(rows)
     assert len(keys) == len(set(keys))
     assert set(keys) == h.expected_rows(env.server.app, [d, f])
+    # a real browser's playback is judged watched by the server (every byte sent, time on the page)
+    judged = [(r["playback_implausible"], r["playback_reason"]) for r in rows
+              if r["session"] == d.sid and r["playback_implausible"] != ""]
+    assert judged and set(judged) == {("0", "")}, judged
     raw = json.loads(urllib.request.urlopen(urllib.request.Request(
         env.server.url + "/admin/export/raw.json", headers={"Authorization": f"Bearer {h.ADMIN}"})).read())
     kinds = {e["kind"] for e in raw["events"]}
