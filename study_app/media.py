@@ -16,7 +16,7 @@ from flask import Blueprint, Response, abort, current_app, request, send_from_di
 from study_app.context import get_store, get_study
 from study_app.pages import get_kind
 from study_app.participant import _own
-from study_app.served import record_served
+from study_app.served import fully_served, record_served
 
 bp = Blueprint("media", __name__)
 
@@ -42,7 +42,10 @@ def video(sid, index, slot):
     store.record_media_request(sid, index, slot)
     media = kind.media(study, page, slot)
     if media.body is not None:
-        # generated media (e.g. headphone-check tones), with byte ranges as for the videos
+        # generated media (e.g. headphone-check tones), with byte ranges as for the videos; heard once:
+        # a session that was already sent every byte of this trial's sound is refused it again
+        if fully_served(store, sid, index, slot):
+            abort(410)
         resp = Response(media.body, mimetype=media.mimetype)
         resp.headers["Cache-Control"] = "private, no-store"
         resp = resp.make_conditional(request, accept_ranges=True, complete_length=len(media.body))

@@ -17,7 +17,7 @@ from sqlalchemy.exc import DBAPIError
 
 from study_app.storage.tables import MediaServed, ParticipantSession, utcnow
 
-__all__ = ["record_served", "served_range", "coverage", "served_by_page"]
+__all__ = ["record_served", "served_range", "coverage", "served_by_page", "fully_served"]
 
 log = logging.getLogger(__name__)
 
@@ -72,3 +72,12 @@ def served_by_page(db, study_id: str) -> dict[tuple[str, int], dict[int, tuple[i
     for (sid, index, slot), rs in ranges.items():
         out.setdefault((sid, index), {})[slot] = (coverage(rs), totals[(sid, index, slot)])
     return out
+
+
+def fully_served(store, session_id: str, page_index: int, slot: int) -> bool:
+    """Whether every byte of this slot's file was already sent to the session (the "play once" rule)."""
+    with store.ReadSession() as db:
+        rows = db.execute(select(MediaServed.first_byte, MediaServed.last_byte, MediaServed.total).where(
+            MediaServed.session_id == session_id, MediaServed.page_index == page_index,
+            MediaServed.slot == slot)).all()
+    return bool(rows) and coverage([(a, b) for a, b, _t in rows]) >= max(t for _a, _b, t in rows)

@@ -143,6 +143,9 @@ def test_page_and_sounds_do_not_give_the_answer_away(folder, tmp_path):
     assert "plain" not in html
     assert html.count("<audio") == 6
     assert "Which tone was the quietest?" in html
+    part = p.client.get(data["videos"][0], headers={"Range": "bytes=0-43"})
+    assert part.status_code == 206
+    assert part.data == trial_wav(spec["trials"][0])[:44]
     for k, url in enumerate(data["videos"]):
         assert url.endswith(f"/media/{data['index']}/{k}")
         snd = p.client.get(url)
@@ -150,9 +153,9 @@ def test_page_and_sounds_do_not_give_the_answer_away(folder, tmp_path):
         assert snd.mimetype == "audio/wav"
         assert snd.data == trial_wav(spec["trials"][k])
         assert snd.headers["Cache-Control"] == "private, no-store"
-    part = p.client.get(data["videos"][0], headers={"Range": "bytes=0-43"})
-    assert part.status_code == 206
-    assert part.data == trial_wav(spec["trials"][0])[:44]
+    # heard once: a sound whose every byte was sent is refused to the session afterwards
+    assert p.client.get(data["videos"][0]).status_code == 410
+    assert p.client.get(data["videos"][1], headers={"Range": "bytes=0-43"}).status_code == 410
     assert p.client.get(data["videos"][0][:-1] + "6").status_code == 404
 
 
