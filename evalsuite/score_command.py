@@ -84,11 +84,30 @@ def _fgd_family(model_path, raw: bool, n: int | None = None, infinity: bool = Fa
               "score the first sample, or each sample index and report the mean over them (summary.csv column "
               "samples; metrics that take every sample at once say all).")
 @click.option("--quiet", is_flag=True, help="No progress bar and no table on the terminal.")
+@click.option("--preset", type=click.Choice(["genea-leaderboard"]), default=None,
+              help="Score exactly as a benchmark does instead: genea-leaderboard = the GENEA Leaderboard's objective "
+              "metrics on SMPL-X .npz (fgd, fid_g, fid_k, var_k, sample_div, bc_a2m, bc_m2a, div, srgr) with its "
+              "naming, sampling and pairing rules (-r: the ground truth folder or BEAT2 language folder; "
+              "docs/leaderboard.md). It uses -m, --audio, --fgd, --bootstrap, --seed, --quiet and the options below.")
+@click.option("--sem", "sem_dir", type=click.Path(file_okay=False, path_type=pathlib.Path), default=None,
+              metavar="DIR", help="With --preset genea-leaderboard: BEAT2 sem/ folder of <video_id>.txt for srgr "
+              "[default: sem/ of a BEAT2 folder given as -r].")
+@click.option("--bc-mean-vel", "bc_mean_vel", type=click.Path(dir_okay=False, path_type=pathlib.Path), default=None,
+              metavar="FILE", help="With --preset genea-leaderboard: per-joint mean speed .npy (55,) that beat "
+              "alignment divides by (EMAGE's mean_vel_smplxflame_30.npy, or evalsuite.leaderboard.beats."
+              "mean_velocity of a training split).")
+@click.option("--sampling", type=click.Choice(["fixed", "all"]), default="fixed", show_default=True,
+              help="With --preset genea-leaderboard: the samples each metric uses: fixed = the first file of a "
+              "recording in text order (_10 before _2), all = every sample.")
+@click.option("--fgd-pairing", "fgd_pairing", type=click.Choice(["published", "corrected"]), default="published",
+              show_default=True, help="With --preset genea-leaderboard and --sampling all: published = samples 2..k "
+              "join the ground truth's side of FGD (as the organisers' script does); corrected = ground truth against "
+              "every sample.")
 @on_mismatch_option
 @smplx_model_option
 def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir, corpus_dir, sigma, fps, resample, speed_bins,
           acceleration_bins, groups, bootstrap, seed, jobs, dask_address, strict, no_figures, fgd_model, fgd_raw, fgd_n,
-          fgd_inf, gac_spec, samples, quiet):
+          fgd_inf, gac_spec, samples, quiet, preset, sem_dir, bc_mean_vel, sampling, fgd_pairing):
     """Score generated motion (CONDITIONS) against natural motion (--reference).
 
     Every folder holds one file per sequence, or several samples <name>_<k>; files are paired with
@@ -98,7 +117,17 @@ def score(reference, conditions, out_dir, joints, metrics, convention, audio_dir
     summary.md, summary.tex and figures/ (PNG and SVG).
 
     Example: evalsuite score -r natural=data/NA data/SysA data/SysB --joints genea2020_upper -o scores
+
+    Leaderboard: evalsuite score --preset genea-leaderboard -r BEAT2/beat_english_v2.0.0 mysystem/ -o lb
+    --smplx-model SMPLX_NEUTRAL_2020.npz --bc-mean-vel mean_vel_smplxflame_30.npy --fgd aeskconv.pt
     """
+    if preset is not None:
+        from evalsuite.leaderboard.preset import run_preset
+
+        run_preset(preset, reference, conditions, out_dir, metrics=metrics, audio_dir=audio_dir, sem_dir=sem_dir,
+                   mean_vel=bc_mean_vel, sampling=sampling, fgd_pairing=fgd_pairing, fgd_model=fgd_model,
+                   bootstrap=bootstrap, seed=seed, quiet=quiet)
+        return
     from evalsuite.metrics.engine import ScoreOptions, score_folders
     from evalsuite.metrics.figures import write_figures
     from evalsuite.metrics.report import format_table, grouped_issues, summary_frame, write_outputs
