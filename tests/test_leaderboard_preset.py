@@ -257,3 +257,19 @@ def test_cli_preset_errors_are_one_line(beat2, tmp_path):
                                   str(tmp_path / "nowhere"), "-o", str(tmp_path / "o")])
     assert r.exit_code != 0
     assert "no such folder of predictions" in r.output and "Traceback" not in r.output
+
+
+def test_mean_velocity_of_a_training_split(beat2):
+    from test_leaderboard_metrics import ref_speed
+
+    from evalsuite.leaderboard.meanvel import mean_velocity_of_split
+
+    got = mean_velocity_of_split(beat2["lang"], beat2["model"], split="train")
+    data = read_smplx(beat2["lang"] / "smplxflame_30" / "2_scott_0_9_9.npz")
+    expect = ref_speed(smplx_positions(data, beat2["model"], mode="full")).mean(axis=0)  # the one train file
+    assert got.shape == (55,)
+    np.testing.assert_allclose(got, expect, rtol=REL)
+    every = mean_velocity_of_split(beat2["lang"], beat2["model"], split=None)
+    assert not np.allclose(every, got)
+    with pytest.raises(InputError, match="no recordings of the 'val' split"):
+        mean_velocity_of_split(beat2["lang"], beat2["model"], split="val")

@@ -11,7 +11,6 @@
 """
 from __future__ import annotations
 
-import csv
 import os
 import pathlib
 from dataclasses import dataclass
@@ -19,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evalsuite.errors import InputError
+from evalsuite.leaderboard.meanvel import split_ids
 from evalsuite.leaderboard.submission import video_id_of
 from evalsuite.motion.smplx import SmplxData, read_smplx
 
@@ -40,14 +40,6 @@ class GroundTruth:
     sem_dir: pathlib.Path | None = None
 
 
-def _test_split(table: pathlib.Path) -> set[str]:
-    with open(table, newline="", encoding="utf-8-sig") as fh:
-        rows = list(csv.DictReader(fh))
-    if not rows or "id" not in rows[0] or "type" not in rows[0]:
-        raise InputError("expected the columns id and type (BEAT2's train_test_split.csv)", path=table, line=1)
-    return {r["id"].strip() for r in rows if (r.get("type") or "").strip().lower() == "test"}
-
-
 def list_ground_truth(gt_dir: str | os.PathLike[str]) -> GroundTruth:
     """The ground truth of a folder of ``<video_id>.npz`` or of a BEAT2 language folder (its test split)."""
     root = pathlib.Path(gt_dir)
@@ -58,7 +50,7 @@ def list_ground_truth(gt_dir: str | os.PathLike[str]) -> GroundTruth:
     if (root / "smplxflame_30").is_dir():
         folder = root / "smplxflame_30"
         if (root / "train_test_split.csv").is_file():
-            wanted = _test_split(root / "train_test_split.csv")
+            wanted = split_ids(root / "train_test_split.csv", "test")
         audio = root / "wave16k" if (root / "wave16k").is_dir() else None
         sem = root / "sem" if (root / "sem").is_dir() else None
     files = {p.stem: p for p in sorted(folder.glob("*.npz")) if wanted is None or p.stem in wanted}
