@@ -273,3 +273,15 @@ def test_mean_velocity_of_a_training_split(beat2):
     assert not np.allclose(every, got)
     with pytest.raises(InputError, match="no recordings of the 'val' split"):
         mean_velocity_of_split(beat2["lang"], beat2["model"], split="val")
+
+
+def test_a_156_wide_prediction_is_refused(beat2, tmp_path):
+    def edit(d):
+        with np.load(d / f"{IDS[0]}_10.npz") as z:
+            arrays = dict(z)
+        arrays["poses"] = arrays["poses"][:, :156]
+        np.savez(d / f"{IDS[0]}_10.npz", **arrays)
+
+    narrow = make_system(beat2, tmp_path, "narrow", edit)
+    with pytest.raises(InputError, match=r"poses: poses are 156 wide; .* \(T, 165\)"):
+        score_leaderboard(beat2["lang"], [narrow], metrics=["fid_g"])

@@ -29,7 +29,7 @@ from evalsuite.errors import InputError
 
 __all__ = ["UPPER_BODY", "SIGMA", "ORDER", "THRESHOLD", "AUDIO_SR", "HOP_LENGTH", "CUT_FRAMES", "FPS",
            "joint_speed", "motion_beats", "load_wave", "audio_onsets", "hit_rate", "beat_alignment",
-           "sequence_bc", "mean_velocity", "read_mean_velocity"]
+           "sequence_bc", "sequence_onsets", "mean_velocity", "read_mean_velocity"]
 
 UPPER_BODY = (3, 6, 9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21)  # spine1..3, neck, collars, head, arms, wrists
 SIGMA = 0.3        # seconds
@@ -127,20 +127,30 @@ def beat_alignment(onsets: np.ndarray, beats: Sequence[np.ndarray], joints: Sequ
 
 def sequence_bc(positions: np.ndarray, wave: np.ndarray, mean_vel: np.ndarray, *, fps: float = FPS,
                 sr: int = AUDIO_SR, cut: int = CUT_FRAMES, sigma: float = SIGMA,
-                published_threshold_frame: bool = True, source: str | None = None) -> tuple[float, float, int]:
+                published_threshold_frame: bool = True, source: str | None = None,
+                onsets: np.ndarray | None = None) -> tuple[float, float, int]:
     """``(a2m, m2a, weight)`` of one sequence of T frames (positions (T, 55, 3), 16 kHz speech ``wave``): the
-    first and last ``cut`` frames (2 s) left out of both streams, weight ``T - 2 cut``."""
+    first and last ``cut`` frames (2 s) left out of both streams, weight ``T - 2 cut``. ``onsets``: those of
+    :func:`sequence_onsets` for this T, when already known."""
     t = len(positions)
-    if t <= 2 * cut:
-        raise InputError(f"beat alignment needs more than {2 * cut} frames ({2 * cut / fps:g} s are cut), got {t}",
-                         path=source)
-    onsets = audio_onsets(wave, int(cut / fps * sr), int((t - cut) / fps * sr), sr=sr)
+    if onsets is None:
+        onsets = sequence_onsets(wave, t, fps=fps, sr=sr, cut=cut, source=source)
     if not len(onsets):
         raise InputError("no onsets in the speech between the cut first and last 2 s; beat alignment needs audio "
                          "beats (the organisers' script divides by zero here)", path=source)
     beats = motion_beats(positions, mean_vel, cut, t - cut, fps, published_threshold_frame=published_threshold_frame)
     a2m, m2a = beat_alignment(onsets, beats, fps=fps, sigma=sigma)
     return a2m, m2a, t - 2 * cut
+
+
+def sequence_onsets(wave: np.ndarray, n_frames: int, *, fps: float = FPS, sr: int = AUDIO_SR, cut: int = CUT_FRAMES,
+                    source: str | None = None) -> np.ndarray:
+    """Onset times (s) of the speech of a sequence of ``n_frames`` between the cut first and last ``cut`` frames:
+    samples ``int(cut / fps * sr)`` to ``int((n_frames - cut) / fps * sr)``."""
+    if n_frames <= 2 * cut:
+        raise InputError(f"beat alignment needs more than {2 * cut} frames ({2 * cut / fps:g} s are cut), got "
+                         f"{n_frames}", path=source)
+    return audio_onsets(wave, int(cut / fps * sr), int((n_frames - cut) / fps * sr), sr=sr)
 
 
 def mean_velocity(positions: Iterable[np.ndarray], fps: float = FPS) -> np.ndarray:

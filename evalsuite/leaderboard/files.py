@@ -99,6 +99,9 @@ def sample_groups(groups: dict[str, list[pathlib.Path]]) -> dict[str, list[pathl
 def read_recording(path: pathlib.Path) -> SmplxData:
     """An SMPL-X file with NaN poses read as 0; the Leaderboard's metrics assume 30 fps."""
     data = read_smplx(path, nan="zero")
+    if data.stored.get("pose_width", 165) != 165:
+        raise InputError(f"poses are {data.stored['pose_width']} wide; the GENEA Leaderboard's script needs all 55 "
+                         "SMPL-X joints, (T, 165)", path=path, field="poses")
     if data.fps != FPS:
         raise InputError(f"mocap_frame_rate is {data.fps:g}; the GENEA Leaderboard's metrics assume {FPS:g} fps "
                          "(BEAT2's smplxflame_30)", path=path, field="mocap_frame_rate")

@@ -165,6 +165,7 @@ def _condition(name: str, folder: pathlib.Path, gt: GroundTruth, gt_data: dict[s
         g_pos = _positions(g, betas, model) if wanted & {"srgr"} else None
         wave = bc.load_wave(ctx["audio"] / f"{vid}.wav") if "bc_a2m" in wanted else None
         weights_rows = lm.read_sem(ctx["sem"] / f"{vid}.txt") if "srgr" in wanted else None
+        onsets: dict[int, np.ndarray] = {}
         for i, path in enumerate(choose(groups[vid], options.sampling)):
             p = read_recording(path).poses
             warn = length_warning(vid, len(g), path, len(p))
@@ -210,8 +211,11 @@ def _condition(name: str, folder: pathlib.Path, gt: GroundTruth, gt_data: dict[s
                 piece.srgr = (piece.srgr[0] + rate * t, piece.srgr[1] + t)
                 values["srgr"] = rate
             if "bc_a2m" in wanted and wave is not None and mean_vel is not None:
+                src = str(ctx["audio"] / f"{vid}.wav")
+                if t not in onsets:   # samples of the same length share the speech's cut
+                    onsets[t] = bc.sequence_onsets(wave, t, source=src)
                 a2m, m2a, w = bc.sequence_bc(pos, wave, mean_vel, published_threshold_frame=options.
-                                             published_threshold_frame, source=str(ctx["audio"] / f"{vid}.wav"))
+                                             published_threshold_frame, source=src, onsets=onsets[t])
                 piece.bc = (piece.bc[0] + a2m * w, piece.bc[1] + m2a * w, piece.bc[2] + w)
                 values.update(bc_a2m=a2m, bc_m2a=m2a)
             rows.extend({"condition": name, "sequence": vid, "sample": path.stem, "metric": m, "value": v}
