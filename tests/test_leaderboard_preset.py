@@ -16,8 +16,9 @@ from test_leaderboard_metrics import click_track
 from evalsuite.cli import main
 from evalsuite.errors import InputError
 from evalsuite.leaderboard import beats as bc
+from evalsuite.leaderboard import evaluate_leaderboard, score_leaderboard
 from evalsuite.leaderboard import metrics as lm
-from evalsuite.leaderboard.score import METRICS, evaluate_leaderboard, score_leaderboard
+from evalsuite.leaderboard.score import METRICS
 from evalsuite.motion.smplx import SmplxData, read_smplx
 from evalsuite.motion.smplx_body import smplx_positions
 
