@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -157,7 +158,7 @@ def test_info_and_convert_on_smplx(tmp_path, monkeypatch):
         assert text in res.output
     data = json.loads(run("info", rec, "--json", "--smplx-model", model).output)
     assert data["format"] == "smplx" and data["positions"].startswith("available (full mode")
-    monkeypatch.setenv(MODEL_ENV, "")        # --smplx-model set it for the process
+    assert os.environ[MODEL_ENV] == ""       # --smplx-model set it for the command only
     res = run("convert", rec, tmp_path / "x.bvh")
     assert res.exit_code == 1 and "--smplx-model" in res.output and "smpl-x.is.tue.mpg.de" in res.output
     assert len(res.output.strip().splitlines()) == 1

@@ -24,8 +24,18 @@ def _export(ctx: click.Context, param: click.Parameter, value: pathlib.Path | No
     if value is not None:
         if not value.expanduser().is_file():
             raise click.BadParameter(f"no such file: {value}", ctx=ctx, param=param)
+        previous = os.environ.get(MODEL_ENV)
         os.environ[MODEL_ENV] = os.fspath(value.expanduser().resolve())
+        # Restored when the command ends, so an in-process call (tests, notebooks) leaves no model behind.
+        ctx.call_on_close(lambda: _restore(previous))
     return value
+
+
+def _restore(previous: str | None) -> None:
+    if previous is None:
+        os.environ.pop(MODEL_ENV, None)
+    else:
+        os.environ[MODEL_ENV] = previous
 
 
 def smplx_model_option(fn: F) -> F:
