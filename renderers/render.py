@@ -15,10 +15,10 @@ from evalsuite.errors import InputError
 from evalsuite.motion import Motion, load_motion
 from evalsuite.motion.ops import cut, resample
 from renderers.audio import cut_audio, read_audio
-from renderers.figure import FigureMesh
 from renderers.layout import Compositor
 from renderers.scene import FigureRenderer, RenderSettings, View, make_view
 from renderers.skeleton import body_motion
+from renderers.styles import STYLES
 from renderers.video import VideoWriter, fit_audio
 
 
@@ -91,8 +91,9 @@ def view_for(motions, settings: RenderSettings) -> View:
 
 
 def _meshes(motions, settings, view):
-    return [FigureMesh(m.joint_names, m.parents, settings.style, view.size, rest_positions=m.positions())
-            for m in motions]
+    """One mesh per motion, from the body style the settings name (shared figure size ``view.size``)."""
+    style = STYLES[settings.body]
+    return [style.mesh(m, settings, view.size) for m in motions]
 
 
 def render_video(motions, out, settings: RenderSettings | None = None, *, audio=None, captions=None,

@@ -16,7 +16,6 @@ from evalsuite.errors import InputError
 from renderers._gl import import_pyrender, offscreen_renderer, set_samples
 from renderers.camera import FRAMINGS, UP_AXES, VIEWS, Camera, _unit, frame_points, view_direction
 from renderers.figure import (
-    FigureMesh,
     FigureStyle,
     body_size,
     forward_direction,
@@ -26,6 +25,7 @@ from renderers.figure import (
     srgb_to_linear,
 )
 from renderers.skeleton import joint_list
+from renderers.styles import STYLES, BodyMesh
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,8 @@ class RenderSettings:
     center: bool = True               # move each motion's mean root position to the origin (ground plane)
     style: FigureStyle = field(default_factory=FigureStyle)
     drop_joints: tuple = ()           # joints not drawn nor framed, besides the non-body ones (renderers.skeleton)
+    body: str = "stick"               # body style, a name in renderers.styles.STYLES
+    character: str | None = None      # the character file of the "character" style (glTF 2.0 with a skin)
 
     def __post_init__(self):
         object.__setattr__(self, "drop_joints", joint_list(self.drop_joints))
@@ -66,6 +68,10 @@ class RenderSettings:
                              field="up_axis")
         if self.fps is not None and not (math.isfinite(self.fps) and self.fps > 0):
             raise InputError(f"fps must be a positive number, got {self.fps!r}", field="fps")
+        if self.body not in STYLES:
+            raise InputError(STYLES.unknown(self.body).reason, field="body")
+        if self.character is not None and not isinstance(self.character, str):
+            raise InputError(f"expected the path of a character file, got {self.character!r}", field="character")
         if self.msaa not in (0, 2, 4, 8):
             raise InputError(f"msaa must be 0, 2, 4 or 8, got {self.msaa!r}", field="msaa")
 
@@ -323,7 +329,7 @@ class FigureRenderer:
             x0 = y0 = x1 = y1 = 0
         return (x0, y0, x1 - x0, y1 - y0)
 
-    def frames(self, mesh: FigureMesh, positions: np.ndarray, chunk: int = 64):
+    def frames(self, mesh: BodyMesh, positions: np.ndarray, chunk: int = 64):
         """Yield one frame per row of ``positions`` ``(T, J, 3)``."""
         for start in range(0, len(positions), chunk):
             verts, norms = mesh.vertices(positions[start:start + chunk])
