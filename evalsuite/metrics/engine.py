@@ -21,7 +21,7 @@ The choices of a run are one :class:`~evalsuite.metrics.options.ScoreOptions`.
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -40,11 +40,11 @@ from evalsuite.metrics.families import (
     registered_families,
 )
 from evalsuite.metrics.histograms import automatic_edges
+from evalsuite.metrics.loading import Positions, grouped_errors, load_scored, selected_positions
 from evalsuite.metrics.options import ScoreOptions, ScoreSetup, ScoreTask
 from evalsuite.metrics.planning import Plan, plan_scoring, resolve_groups, resolve_metrics
 from evalsuite.metrics.samples import expand_for_each, label_samples
 from evalsuite.metrics.tracks import wrist_track
-from evalsuite.motion.io import load_motion
 from evalsuite.parallel import run
 
 __all__ = ["ScoreOptions", "ScoreSetup", "ScoreTask", "ScoreResult", "score_sequence", "probe_ranges", "plan_for",
@@ -74,39 +74,20 @@ class ScoreResult:
     figure_data: dict[str, Any] = field(default_factory=dict)   # figure name -> condition -> data (families')
 
 
-def _load(path: pathlib.Path, setup: ScoreSetup) -> tuple[Any, list[dict[str, Any]]]:
-    """The motion (resampled to ``--resample``) and what was resampled, for the provenance."""
-    from evalsuite.motion.ops import resample
-
-    motion = load_motion(path, fallback_fps=setup.fps)
-    done: list[dict[str, Any]] = []
-    if setup.resample is not None and abs(motion.fps - setup.resample) > 1e-9 * setup.resample:
-        done.append({"from_fps": float(motion.fps), "to_fps": float(setup.resample), "why": "--resample"})
-        motion = resample(motion, setup.resample)
-    return motion, done
-
-
-def _selected_positions(motion: Any, joints: list[str]) -> np.ndarray:
-    index = {n: i for i, n in enumerate(motion.joint_names)}
-    missing = [j for j in joints if j not in index]
-    if missing:
-        raise InputError(f"skeleton differs from the natural motion: missing joints {', '.join(missing[:8])}"
-                         f"{' ...' if len(missing) > 8 else ''}; score a common subset with --joints",
-                         path=motion.source)
-    return np.asarray(motion.positions()[:, [index[j] for j in joints]])
-
-
-def _measure(motion: Any, pos: np.ndarray, setup: ScoreSetup, conv: Convention, natural_pos: np.ndarray | None,
-             onsets: np.ndarray | None, natural_cache: dict[Any, Any], audio: tuple[np.ndarray, int] | None = None,
-             segment: Any = None) -> dict[str, Any]:
-    if len(pos) < 4:
-        raise InputError(f"only {len(pos)} frames; at least 4 are needed (jerk uses 3rd differences)",
+def _measure(motion: Any, pos: Callable[[], np.ndarray], setup: ScoreSetup, conv: Convention,
+             natural_pos: Callable[[], np.ndarray] | None, onsets: np.ndarray | None, natural_cache: dict[Any, Any],
+             audio: tuple[np.ndarray, int] | None = None, segment: Any = None) -> dict[str, Any]:
+    if motion.n_frames < 4:
+        raise InputError(f"only {motion.n_frames} frames; at least 4 are needed (jerk uses 3rd differences)",
                          path=motion.source)
     ctx = SequenceContext(motion, pos, setup, conv, natural_pos, onsets, natural_cache, audio, segment)
     for family in setup.active():
         family.measure(ctx)
     if setup.figures:
-        ctx.record["wrist_track"] = wrist_track(motion)
+        try:
+            ctx.record["wrist_track"] = wrist_track(motion)
+        except InputError as exc:   # e.g. SMPL-X without a body model: the figure leaves this file out
+            ctx.record["wrist_track_error"] = exc.reason
     return ctx.record
 
 
@@ -135,8 +116,8 @@ def score_sequence(task: ScoreTask) -> dict[str, Any]:
     natural_cache: dict[Any, Any] = {}
     for k, (cond, path) in enumerate(task.entries):
         try:
-            motion, resampled = _load(path, setup)
-            pos = _selected_positions(motion, setup.joints)
+            motion, resampled = load_scored(path, setup)
+            pos = Positions(motion, setup.joints)   # computed only if a chosen family reads positions
             if k == 0:
                 natural_pos = pos
             rec = _measure(motion, pos, setup, conv, natural_pos, onsets, natural_cache, audio, segment)
@@ -161,8 +142,8 @@ def probe_ranges(task: tuple[pathlib.Path, ScoreSetup]) -> dict[str, Any]:
     path, setup = task
     conv = get_convention(setup.convention)
     try:
-        motion, _ = _load(path, setup)
-        pos = _selected_positions(motion, setup.joints)
+        motion, _ = load_scored(path, setup)
+        pos = selected_positions(motion, setup.joints)
         out: dict[str, Any] = {"path": str(path), "fps": motion.fps}
         for q, order in (("speed", 1), ("acceleration", 2)):
             n = derivative_norms(pos, order, conv.rate(motion.fps))
@@ -230,12 +211,15 @@ def reduce_results(plan: Plan, setup: ScoreSetup, results: list[dict[str, Any]],
             issues.extend(f"{cond}/{res['name']}: {w}" for w in rec.get("warnings", []))
             records[cond][res["name"]] = rec
     if errors and opts.strict:
-        raise InputError(f"{len(errors)} file(s) could not be scored (--strict): " + "; ".join(errors[:5]))
+        raise InputError(f"{len(errors)} file(s) could not be scored (--strict): " + grouped_errors(errors))
     issues.extend(f"skipped: {e}" for e in errors)
+    no_track = [r["wrist_track_error"] for recs in records.values() for r in recs.values() if "wrist_track_error" in r]
+    if no_track:
+        issues.append("the wrist-track figure leaves files out: " + grouped_errors(no_track))
     fps_by_cond = {c: sorted({r["fps"] for r in recs.values()}) for c, recs in records.items() if recs}
     all_fps = sorted({f for v in fps_by_cond.values() for f in v})
     if not records[plan.reference]:
-        raise InputError("no natural file could be scored: " + "; ".join(errors[:5]), field="reference")
+        raise InputError("no natural file could be scored: " + grouped_errors(errors), field="reference")
     if len(all_fps) > 1:
         detail = "; ".join(f"{c}: {', '.join(f'{f:g}' for f in v)} fps" for c, v in fps_by_cond.items())
         raise InputError(f"frame rates differ ({detail}); evalsuite does not mix rates: pass --resample FPS "

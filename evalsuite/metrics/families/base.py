@@ -76,7 +76,9 @@ class MetricFamily:
 class SequenceContext:
     """One file of one sequence, as the families see it in a worker.
 
-    ``pos``: the file's positions of the scored joints ``(T, J, 3)``; ``natural_pos`` the natural file's
+    ``pos``: the file's positions of the scored joints ``(T, J, 3)``, computed on first use (a family that reads
+    only ``motion``, such as FGD on rotations, never needs them, so SMPL-X files score without a body model);
+    ``natural_pos`` the natural file's
     (None while measuring the natural file itself is not the case: the natural file is measured first and
     sees itself); ``cache``: per-file values shared by families (e.g. derivative norms);
     ``natural_cache``: per-sequence values shared across the sequence's conditions; ``audio``: the
@@ -84,21 +86,34 @@ class SequenceContext:
     (:class:`evalsuite.corpus.Segment`, with the transcript) when scoring with a corpus.
     """
 
-    def __init__(self, motion: Any, pos: np.ndarray, setup: Any, conv: Convention, natural_pos: np.ndarray | None,
+    def __init__(self, motion: Any, pos: np.ndarray | Callable[[], np.ndarray], setup: Any, conv: Convention,
+                 natural_pos: np.ndarray | Callable[[], np.ndarray] | None,
                  audio_onsets: np.ndarray | None, natural_cache: dict[Any, Any],
                  audio: tuple[np.ndarray, int] | None = None, segment: Any = None):
         self.motion = motion
-        self.pos = pos
+        self._pos = pos
         self.fps = float(motion.fps)
         self.setup = setup
         self.conv = conv
-        self.natural_pos = natural_pos
+        self._natural_pos = natural_pos
         self.audio_onsets = audio_onsets
         self.natural_cache = natural_cache
         self.audio = audio
         self.segment = segment
         self.cache: dict[str, Any] = {}
-        self.record: dict[str, Any] = {"fps": self.fps, "n_frames": int(len(pos))}
+        self.record: dict[str, Any] = {"fps": self.fps, "n_frames": int(motion.n_frames)}
+
+    @property
+    def pos(self) -> np.ndarray:
+        if callable(self._pos):
+            self._pos = np.asarray(self._pos())
+        return self._pos
+
+    @property
+    def natural_pos(self) -> np.ndarray | None:
+        if callable(self._natural_pos):
+            self._natural_pos = np.asarray(self._natural_pos())
+        return self._natural_pos
 
     @property
     def families(self) -> set[str]:
@@ -119,7 +134,7 @@ class SequenceContext:
     def aligned(self) -> tuple[np.ndarray, np.ndarray] | None:
         """This file and the natural one truncated to their common length (a warning is recorded once if
         they differ by more than the setup's tolerance); None without a natural file."""
-        if self.natural_pos is None:
+        if self._natural_pos is None:
             return None
 
         def compute() -> tuple[np.ndarray, np.ndarray]:
