@@ -9,7 +9,12 @@ sounds quietest and people pick it. Woods et al. use 6 trials, each heard once, 
 participant with at least 5 correct (chance passes 1.8 % of the time).
 
 The answer of a trial is in the sound only: the page and its URLs name the trial number, never
-the order of the tones.
+the order of the tones. Nor do the files' bytes give it away to a lookup table: each trial's sound is
+made when it is requested from a seed stored in the session's plan (:func:`trial_seeds`), with its own
+random starting phase for each tone and a level jitter of the whole trial (the same for its three
+tones, so the quiet tone stays 6 dB below the others). Every trial file therefore has the same length
+and byte size whatever its answer, and no two sessions receive the same file. A program that decodes the
+audio and measures each tone's level can still find the quiet tone: that is the listening task itself.
 """
 from __future__ import annotations
 
@@ -26,6 +31,7 @@ TONE_SECONDS = 1.0
 RAMP_SECONDS = 0.1
 GAP_SECONDS = 0.5
 LEVEL = 0.25            # peak of the plain tone, about -12 dBFS: room for the listener's volume
+LEVEL_JITTER_DB = 1.0   # a trial's level is LEVEL times 10**(u/20), u uniform in +-this (seeded)
 QUIET_DB = -6.0
 TONES = ("plain", "quiet", "antiphase")
 #: the six orders of the three tones; a plan's trial names one of them by index
@@ -48,9 +54,14 @@ def trial_orders(n_trials: int, rng) -> list[int]:
     return out[:n_trials]
 
 
-def _tone() -> np.ndarray:
+def trial_seeds(n_trials: int, rng) -> list[int]:
+    """One seed per trial (stored in the plan): it draws the trial's phases and level jitter."""
+    return [rng.getrandbits(48) for _ in range(n_trials)]
+
+
+def _tone(phase: float = 0.0) -> np.ndarray:
     t = np.arange(int(RATE * TONE_SECONDS)) / RATE
-    x = np.sin(2 * np.pi * FREQUENCY * t)
+    x = np.sin(2 * np.pi * FREQUENCY * t + phase)
     n = int(RATE * RAMP_SECONDS)
     ramp = 0.5 - 0.5 * np.cos(np.pi * np.arange(n) / n)
     x[:n] *= ramp
@@ -58,12 +69,23 @@ def _tone() -> np.ndarray:
     return x
 
 
-def trial_samples(order: int) -> np.ndarray:
-    """Stereo samples ``(n, 2)`` in [-1, 1] of one trial, tones in the given order."""
-    tone = LEVEL * _tone()
+def trial_samples(order: int, seed: int | None = None) -> np.ndarray:
+    """Stereo samples ``(n, 2)`` in [-1, 1] of one trial, tones in the given order.
+
+    Without a seed every tone starts at phase 0 at level :data:`LEVEL`. With one, tone ``k`` is
+    ``g * LEVEL * ramp(t) * sin(2 pi f t + phi_k)`` with ``phi_k`` uniform in [0, 2 pi) per tone and
+    ``g = 10**(u / 20)``, ``u`` uniform in +-:data:`LEVEL_JITTER_DB` dB once per trial.
+    """
+    if seed is None:
+        phases, gain = np.zeros(3), 1.0
+    else:
+        rng = np.random.default_rng(seed)
+        phases = rng.uniform(0.0, 2 * np.pi, 3)
+        gain = 10 ** (rng.uniform(-LEVEL_JITTER_DB, LEVEL_JITTER_DB) / 20)
     gap = np.zeros((int(RATE * GAP_SECONDS), 2))
     parts = []
     for k, kind in enumerate(ORDERS[order]):
+        tone = gain * LEVEL * _tone(float(phases[k]))
         if kind == "plain":
             parts.append(np.stack([tone, tone], axis=1))
         elif kind == "quiet":
@@ -76,12 +98,13 @@ def trial_samples(order: int) -> np.ndarray:
     return np.concatenate(parts)
 
 
-@functools.lru_cache(maxsize=len(ORDERS))
-def trial_wav(order: int) -> bytes:
-    """One trial as a 16-bit stereo WAV file (made once per process, about 150 kB)."""
+@functools.lru_cache(maxsize=64)
+def trial_wav(order: int, seed: int | None = None) -> bytes:
+    """One trial as a 16-bit stereo WAV file (about 150 kB; the same length and size for every order
+    and seed). The study app passes the trial's stored seed, so a range request gets the same bytes."""
     if not 0 <= order < len(ORDERS):
         raise ValueError(f"trial order must be in 0..{len(ORDERS) - 1}, got {order}")
-    pcm = np.round(trial_samples(order) * 32767).astype("<i2")
+    pcm = np.round(trial_samples(order, seed) * 32767).astype("<i2")
     buf = io.BytesIO()
     with wave.open(buf, "wb") as w:
         w.setnchannels(2)

@@ -3,6 +3,7 @@ failed screening does to the session."""
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import random
@@ -18,6 +19,7 @@ from study_app.context import store_of, study_of
 from study_app.headphones import (
     FREQUENCY,
     GAP_SECONDS,
+    LEVEL_JITTER_DB,
     ORDERS,
     RATE,
     TONE_SECONDS,
@@ -145,13 +147,13 @@ def test_page_and_sounds_do_not_give_the_answer_away(folder, tmp_path):
     assert "Which tone was the quietest?" in html
     part = p.client.get(data["videos"][0], headers={"Range": "bytes=0-43"})
     assert part.status_code == 206
-    assert part.data == trial_wav(spec["trials"][0])[:44]
+    assert part.data == trial_wav(spec["trials"][0], spec["sounds"][0])[:44]
     for k, url in enumerate(data["videos"]):
         assert url.endswith(f"/media/{data['index']}/{k}")
         snd = p.client.get(url)
         assert snd.status_code == 200
         assert snd.mimetype == "audio/wav"
-        assert snd.data == trial_wav(spec["trials"][k])
+        assert snd.data == trial_wav(spec["trials"][k], spec["sounds"][k])
         assert snd.headers["Cache-Control"] == "private, no-store"
     # heard once: a sound whose every byte was sent is refused to the session afterwards
     assert p.client.get(data["videos"][0]).status_code == 410
@@ -238,3 +240,50 @@ def test_on_fail_continue_only_records_the_outcome(folder, tmp_path):
     rows = list(csv.DictReader(io.StringIO(client.get("/admin/export/results.csv", headers=auth)
                                            .get_data(as_text=True))))
     assert not any(r["page_type"] == "headphone_check" for r in rows)
+
+
+# ------------------------------------------------------------ bytes that do not give the answer away
+
+def test_a_seeded_trial_keeps_the_levels_and_the_antiphase_and_is_reproducible():
+    for order, seed in ((0, 11), (3, 2**40 + 5), (5, 987654321)):
+        x = trial_samples(order, seed)
+        n, gap = int(RATE * TONE_SECONDS), int(RATE * GAP_SECONDS)
+        tones = [x[k * (n + gap): k * (n + gap) + n] for k in range(3)]
+        kinds = ORDERS[order]
+        rms = {kind: np.sqrt(np.mean(t ** 2)) for kind, t in zip(kinds, tones)}
+        assert 20 * np.log10(rms["quiet"] / rms["plain"]) == pytest.approx(-6.0, abs=0.01)
+        assert rms["antiphase"] == pytest.approx(rms["plain"], rel=1e-3)
+        anti = tones[kinds.index("antiphase")]
+        np.testing.assert_array_equal(anti[:, 0], -anti[:, 1])
+        # level jitter of at most LEVEL_JITTER_DB around the unjittered trial's level
+        jitter_db = 20 * np.log10(rms["plain"] / np.sqrt(np.mean(_tones(order)[kinds.index("plain")] ** 2)))
+        assert abs(jitter_db) <= LEVEL_JITTER_DB + 0.01
+        # phases differ from the unseeded trial; the same seed makes the same bytes (range requests)
+        assert not np.allclose(x, trial_samples(order))
+        assert trial_wav(order, seed) == trial_wav(order, seed)
+        assert trial_wav(order, seed) != trial_wav(order, seed + 1)
+
+
+def test_sizes_headers_and_hashes_of_the_sounds_do_not_reveal_the_answer():
+    """Over 120 sessions' plans (720 trials): every file has the same size and header, and no file is sent
+    twice, so a lookup table of hashes learnt from half the sessions answers no trial of the other half;
+    a guess from size or header is at chance (each answer position a third of the time)."""
+    from types import SimpleNamespace
+
+    from study_app.pages.headphone_check import KIND
+    page = SimpleNamespace(id="headphones", type="headphone_check", cfg={"trials": 6})
+    plan = SimpleNamespace(study=SimpleNamespace(seed=3))
+    trials = []
+    for session in range(120):
+        spec = KIND.plan_pages(page, session, plan)[0]
+        assert len(spec["sounds"]) == 6
+        for slot, order in enumerate(spec["trials"]):
+            body = KIND.media(None, spec, slot).body
+            trials.append((hashlib.sha256(body).hexdigest(), len(body), body[:44], correct_choice(order)))
+    assert len({size for _, size, _, _ in trials}) == 1
+    assert len({head for _, _, head, _ in trials}) == 1
+    assert len({digest for digest, _, _, _ in trials}) == len(trials)
+    learnt = {digest: answer for digest, _, _, answer in trials[:360]}
+    assert sum(digest in learnt for digest, _, _, _ in trials[360:]) == 0
+    answers = Counter(answer for _, _, _, answer in trials)
+    assert answers == {1: 240, 2: 240, 3: 240}

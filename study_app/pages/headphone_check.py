@@ -2,14 +2,15 @@
 
 ``trials`` (default 6), ``pass`` = correct answers needed (default 5 of 6, their threshold), ``on_fail`` =
 ``end`` the session with the failure code (default) or ``continue`` and only record the outcome. Each
-session gets its own shuffled tone orders; each sound is heard once.
+session gets its own shuffled tone orders and, per trial, a stored seed from which its sound is made
+(random phases and level: the bytes differ between sessions); each sound is heard once.
 """
 from __future__ import annotations
 
 import random
 from typing import Any
 
-from study_app.headphones import correct_choice, trial_orders, trial_wav
+from study_app.headphones import correct_choice, trial_orders, trial_seeds, trial_wav
 from study_app.pages.base import Media, Outcome, PageKind
 from study_app.payload import PayloadError, int_in, only_keys
 
@@ -41,13 +42,15 @@ class HeadphoneCheckKind(PageKind):
 
     def plan_pages(self, page: Any, session: int, plan: Any) -> list[dict]:
         rng = random.Random(f"{plan.study.seed}:{session}:{page.id}")   # str seeds are stable across Pythons
-        return [{"page": page.id, "type": page.type, "trials": trial_orders(page.cfg["trials"], rng)}]
+        trials = trial_orders(page.cfg["trials"], rng)
+        return [{"page": page.id, "type": page.type, "trials": trials, "sounds": trial_seeds(len(trials), rng)}]
 
     def n_slots(self, spec: dict) -> int:
         return len(spec.get("trials", []))
 
     def media(self, study: Any, spec: dict, slot: int) -> Media:
-        return Media(body=trial_wav(spec["trials"][slot]), mimetype="audio/wav")
+        seeds = spec.get("sounds")     # plans built before the seeds existed: the fixed sounds
+        return Media(body=trial_wav(spec["trials"][slot], seeds[slot] if seeds else None), mimetype="audio/wav")
 
     def page_data(self, study: Any, spec: dict, cfg: dict) -> dict:
         return {"play_once": True}          # Woods et al.: each trial is heard once
