@@ -9,6 +9,7 @@ import click
 
 from evalsuite.corpus.cli import on_mismatch_option
 from evalsuite.errors import InputError
+from evalsuite.generators.presets import DEFAULT_PRESET, PRESETS
 from evalsuite.generators.registry import find_generator, list_generators
 
 __all__ = ["generators", "generate_command", "train_command"]
@@ -205,11 +206,14 @@ def generate_command(name: str, corpus: str | None, split: str, segments: tuple[
 @click.option("--config", "config_file", type=click.Path(dir_okay=False), help="Options (YAML/JSON).")
 @click.option("--set", "settings", multiple=True, metavar="KEY=VALUE", help="One option (repeatable).")
 @click.option("--budget-minutes", type=float, help="Stop training after this many minutes.")
+@click.option("--preset", type=click.Choice(PRESETS), default=DEFAULT_PRESET, show_default=True,
+              help="Named configuration: cpu-small (evalsuite's variant, small and fast on a CPU) or paper (the "
+                   "system as its paper describes it); --set/--config options override it. docs/generators.md.")
 @on_mismatch_option
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of weights, data order and noise.")
 @click.option("-o", "--out", required=True, type=click.Path(file_okay=False), help="Model folder to write.")
 def train_command(name: str, corpus: str, config_file: str | None, settings: tuple[str, ...],
-                  budget_minutes: float | None, seed: int, out: str) -> None:
+                  budget_minutes: float | None, preset: str, seed: int, out: str) -> None:
     """Train a generator on a corpus's train split (validation loss on its val split each epoch); writes a
     model folder with model.json (everything needed to use it) and train_log.csv.
 
@@ -220,7 +224,7 @@ def train_command(name: str, corpus: str, config_file: str | None, settings: tup
 
     entry = find_generator(name)
     result = train(entry, _load_corpus(corpus), out, seed=seed, budget_minutes=budget_minutes,
-                   config=read_config(config_file, settings))
+                   config=read_config(config_file, settings), preset=preset)
     last = result.history[-1] if result.history else {}
     losses = ", ".join(f"{k} {v:.4g}" for k, v in last.items() if k.endswith("loss") and isinstance(v, float))
     click.echo(f"{name}: {len(result.history)} epochs" + (f" (last: {losses})" if losses else "") + f"; model in {out}")

@@ -24,6 +24,7 @@ import numpy as np
 
 from evalsuite.errors import InputError
 from evalsuite.generators.contract import GenerationRequest, Generator, GeneratorError
+from evalsuite.generators.presets import model_preset
 from evalsuite.generators.provenance import describe_inputs, model_sha256, package_versions
 from evalsuite.generators.registry import GeneratorEntry, generator_class
 from evalsuite.generators.rules import conform, conform_smplx, motion_digest
@@ -213,6 +214,7 @@ def generate(entry: GeneratorEntry, requests: Sequence[GenerationRequest], out_d
     record = {"format": GENERATION_FORMAT, "generator": spec.as_dict(), "target": entry.target,
               "origin": entry.origin, "distribution": entry.distribution, "config": config,
               "model": {"path": str(model_path), "sha256": model_hash} if model_path else None,
+              "preset": model_preset(model_path),
               "seed": seed, "fps": sorted(fps_values), "samples": samples, "post": [p.as_dict() for p in post],
               "packages": package_versions(), "cache_key": key, "inputs": inputs, **dict(extra_record or {}),
               "runtime_s": round(time.perf_counter() - t0, 3), "files": rows}

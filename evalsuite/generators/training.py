@@ -21,6 +21,7 @@ from typing import Any
 from evalsuite.corpus.types import Corpus
 from evalsuite.errors import InputError
 from evalsuite.generators.contract import GeneratorError, TrainingResult
+from evalsuite.generators.presets import DEFAULT_PRESET, apply_preset
 from evalsuite.generators.provenance import package_versions
 from evalsuite.generators.registry import GeneratorEntry, generator_class
 from evalsuite.hashing import file_sha256
@@ -43,8 +44,9 @@ def corpus_summary(corpus: Corpus) -> dict[str, Any]:
 
 def train(entry: GeneratorEntry, corpus: Corpus, out_dir: str | pathlib.Path, *, seed: int = 0,
           budget_minutes: float | None = None, config: Mapping[str, Any] | None = None,
-          progress: bool = True) -> TrainingResult:
-    """Fit ``entry``'s generator on ``corpus`` and write the model folder ``out_dir`` (see the module doc)."""
+          progress: bool = True, preset: str = DEFAULT_PRESET) -> TrainingResult:
+    """Fit ``entry``'s generator on ``corpus`` and write the model folder ``out_dir`` (see the module doc).
+    ``preset`` (:mod:`evalsuite.generators.presets`) sets options under ``config``'s."""
     from tqdm import tqdm
 
     assert entry.spec is not None
@@ -56,7 +58,7 @@ def train(entry: GeneratorEntry, corpus: Corpus, out_dir: str | pathlib.Path, *,
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     gen = generator_class(entry.target)()
-    gen.configure(dict(config or {}))
+    gen.configure(apply_preset(entry.spec.name, preset, config or {}))
     bar = tqdm(desc=f"train {entry.spec.name}", unit="epoch", disable=not progress, leave=False)
 
     def on_epoch(row: dict[str, Any]) -> None:
@@ -74,7 +76,7 @@ def train(entry: GeneratorEntry, corpus: Corpus, out_dir: str | pathlib.Path, *,
     files = {p.relative_to(out).as_posix(): file_sha256(p) for p in sorted(out.rglob("*"))
              if p.is_file() and p.name not in ("model.json", "train_log.csv")}
     record = {"format": MODEL_FORMAT, "generator": entry.spec.as_dict(), "target": entry.target,
-              "config": dict(gen.config), "seed": seed, "budget_minutes": budget_minutes,
+              "config": dict(gen.config), "preset": preset, "seed": seed, "budget_minutes": budget_minutes,
               "training_seconds": round(seconds, 2), "corpus": corpus_summary(corpus), "history": result.history,
               "files": files, "packages": package_versions(), **result.meta}
     (out / "model.json").write_text(json.dumps(record, indent=1, default=str), encoding="utf-8")

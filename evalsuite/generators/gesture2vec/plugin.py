@@ -106,6 +106,9 @@ class Gesture2Vec(Generator):
                 "reset_dead_codes": "true (default) or false: restart unused codes in VQ-DVAE training",
                 "aligned": "true (default): the translation decoder also reads the words of its chunk and the one "
                            "before; false: attention alone (the paper's)",
+                "weakened_decoder": "false (default): the VQ-DVAE's first stage trains encoder, codebook and "
+                                    "decoder together; true: the decoder is frozen in that stage (the paper's "
+                                    "weakened decoder, §4.3), then trained alone in the second",
                 "threads": "torch threads (default 1)",
                 "scale_floor": FLOOR_OPTION},
         deviations=CORE_DEVIATIONS + MY_DEVIATIONS + (FLOOR_DEVIATION,))
@@ -126,6 +129,7 @@ class Gesture2Vec(Generator):
               "learning_rate": self.float_option("learning_rate", 1e-3),
               "reset_dead_codes": self.bool_option("reset_dead_codes", True),
               "aligned": self.bool_option("aligned", True),
+              "weakened_decoder": self.bool_option("weakened_decoder", False),
               "threads": self.int_option("threads", 1),
               "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR)}
         for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
@@ -162,7 +166,7 @@ class Gesture2Vec(Generator):
                            vq_decoder_epochs=st["vq_decoder_epochs"], translation_epochs=st["translation_epochs"],
                            learning_rate=st["learning_rate"], translation_learning_rate=st["learning_rate"],
                            batch_size=st["batch_size"], reset_dead_codes=st["reset_dead_codes"],
-                           scale_floor=st["scale_floor"])
+                           scale_floor=st["scale_floor"], weakened_decoder=st["weakened_decoder"])
         model = train_gesture2vec(poses, words, config, rep.fps, stages, seed=seed, val_poses=vposes,
                                   val_words=vwords, budget_seconds=budget_seconds(budget_minutes), on_epoch=progress)
         rep.save(out_dir)

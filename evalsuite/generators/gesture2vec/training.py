@@ -41,6 +41,7 @@ class G2VStages:
     reset_dead_codes: bool = True        # codes unused in a VQ epoch restart at a random chunk's encoding
     scale_floor: float = 0.0             # a dimension's range is at least this fraction of the widest one's
     budget_shares: tuple[float, float, float] = (0.10, 0.45, 0.45)
+    weakened_decoder: bool = False       # the paper's §4.3: the decoder frozen in the first VQ-DVAE stage
 
 
 @dataclass
@@ -210,7 +211,10 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     with torch.no_grad():
         z0 = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), config.codebook, replace=len(ct) < config.codebook))])
         vq.codebook.weight.copy_(z0 + 0.01 * torch.randn_like(z0))
-    opt = torch.optim.Adam(vq.parameters(), lr=stages.learning_rate)
+    frozen = [*vq.decoder.parameters(), *vq.out.parameters()] if stages.weakened_decoder else []
+    for p in frozen:  # weakened decoder: no gradient reaches it, the encoder carries the reconstruction
+        p.requires_grad_(False)
+    opt = torch.optim.Adam([p for p in vq.parameters() if p.requires_grad], lr=stages.learning_rate)
     total_vq = stages.vq_epochs + stages.vq_decoder_epochs
     epoch = 0
     while epoch < total_vq:
@@ -218,6 +222,8 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         if decoder_only and epoch == stages.vq_epochs:
             for p in [*vq.encoder.parameters(), *vq.codebook.parameters()]:
                 p.requires_grad_(False)
+            for p in frozen:
+                p.requires_grad_(True)
             opt = torch.optim.Adam([*vq.decoder.parameters(), *vq.out.parameters()], lr=stages.learning_rate)
         vq.train()
         total, counts = 0.0, np.zeros(config.codebook)
