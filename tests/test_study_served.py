@@ -84,3 +84,38 @@ def test_scripted_clients_are_flagged_on_every_row_and_excluded(tmp_path):
     pb = excl[excl["reason"] == "implausible_playback"]
     assert set(pb["session"]) == {byte.sid, faker.sid, hasty.sid}
     assert "unwatched: bytes 1/" in pb.set_index("session").loc[byte.sid, "detail"]
+
+
+SHORT_YAML = h.STUDY_YAML.split("  - type: questionnaire")[0] + """\
+  - type: pairwise
+    id: hl
+    conditions: [SYSALPHA, SYSBETA, NATURALGT]
+    questions:
+      - {{id: human_likeness, text: "Which one moves more like a real person?"}}
+    pages: 2
+  - type: finish
+    id: finish
+    text: Thank you.
+"""
+
+
+def test_waiting_less_than_the_clips_at_the_default_fraction_is_flagged(tmp_path):
+    """playback_min_fraction left at its default (1.0): a client that fetches every byte and posts 'ended' for
+    each video but answers after half the 1 s clips is flagged on every row; one that stays a whole clip is not."""
+    path = h.make_study(tmp_path, yaml_text=SHORT_YAML.format(sessions=2))
+    app = create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{tmp_path / 'p.db'}", "SECRET_KEY": h.SECRET,
+                      "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False, "INSTANCE_PATH": str(tmp_path / "i")})
+    assert study_of(app).playback_min_fraction == 1.0
+    rng = np.random.default_rng(5)
+    half, _ = _walk(app, 21, rng, "full", dwell=0.5)
+    whole, _ = _walk(app, 22, rng, "full", dwell=1.05)
+    auth = {"Authorization": f"Bearer {h.ADMIN}"}
+    export = app.test_client().get("/admin/export/results.csv", headers=auth).get_data(as_text=True)
+    rows = list(csv.DictReader(io.StringIO(export)))
+    by = {s: [r for r in rows if r["session"] == s] for s in (half.sid, whole.sid)}
+    assert len(by[half.sid]) == len(by[whole.sid]) == 2
+    for r in by[half.sid]:
+        assert r["playback_implausible"] == "1"
+        assert "s after the page for 1.0 s of video" in r["playback_reason"]
+        assert "unwatched" not in r["playback_reason"]
+    assert all(r["playback_implausible"] == "0" and r["playback_reason"] == "" for r in by[whole.sid])
