@@ -24,7 +24,8 @@ from evalsuite.corpus.types import SPLITS, Corpus
 from evalsuite.errors import InputError
 
 # Lazily imported subcommands: name -> "module:attribute" (a click command).
-SUBCOMMANDS: dict[str, str] = {"synth": "evalsuite.synth.cli:synth"}
+SUBCOMMANDS: dict[str, str] = {"synth": "evalsuite.synth.cli:synth",
+                               "mean-velocity": "evalsuite.leaderboard.meanvel_cli:mean_velocity_command"}
 
 
 def _exists(module: str) -> bool:
