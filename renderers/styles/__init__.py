@@ -58,3 +58,4 @@ def register_style(style: BodyStyle) -> BodyStyle:
 
 # The built-in styles, imported when first asked for (a style module may need trimesh, a glTF reader...).
 STYLES.register_lazy("stick", "renderers.styles.stick:STYLE")
+STYLES.register_lazy("character", "renderers.styles.character:STYLE")

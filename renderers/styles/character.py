@@ -1,0 +1,86 @@
+"""The skinned character style: a rigged glTF 2.0 body posed by the motion's joint positions.
+
+``STYLES["character"].mesh(motion, settings, size)`` reads the character (``settings.character`` when set, else
+evalsuite's own, ``renderers/data/characters/mpfb2_neutral.glb``: a CC0 MakeHuman/MPFB2 body of 10,000
+triangles, see ``renderers/data/ATTRIBUTION.md``), picks a joint map (``settings.joint_map``, a YAML file beside
+the character named ``<character>.joints.yaml``, or the shipped map that fits the motion best, see
+:mod:`renderers.styles.character_maps`), scales the character to the motion's bone lengths and poses it per
+block of frames (:mod:`renderers.styles.character_pose`). The vertex array is the same every frame in layout,
+so the renderer updates it in place.
+"""
+from __future__ import annotations
+
+import functools
+import os
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from renderers.figure import srgb_to_linear
+from renderers.gltf_skin import SkinnedMesh, read_skinned_gltf
+from renderers.styles import BodyStyle
+from renderers.styles.character_maps import choose_map
+from renderers.styles.character_pose import CharacterRig, skin
+
+DEFAULT_CHARACTER = pathlib.Path(__file__).resolve().parent.parent / "data" / "characters" / "mpfb2_neutral.glb"
+SKIN_COLOR = (0.80, 0.77, 0.73)     # sRGB: a neutral clay, the same for every condition (blinding)
+
+
+@functools.lru_cache(maxsize=4)
+def _read(path: str, mtime: float) -> SkinnedMesh:
+    return read_skinned_gltf(path)
+
+
+def load_character(path=None) -> SkinnedMesh:
+    """The character at ``path`` (default: the shipped one), read once per file version."""
+    p = os.fspath(path) if path is not None else os.fspath(DEFAULT_CHARACTER)
+    try:
+        mtime = os.stat(p).st_mtime
+    except OSError:
+        mtime = -1.0
+    return _read(p, mtime)
+
+
+class CharacterMesh:
+    """A character posed by a motion: constant :attr:`faces` and :attr:`colors`, per-frame :meth:`vertices`."""
+
+    def __init__(self, character: SkinnedMesh, motion_joints, rest_positions, *, joint_map=None,
+                 motion_source=None, color=SKIN_COLOR):
+        self.character = character
+        self.map_name, mapping = choose_map(character.joint_names, list(motion_joints), joint_map=joint_map,
+                                            motion_source=motion_source, character_source=character.source)
+        self.rig = CharacterRig(character.joint_names, character.parents, character.bind_positions, mapping)
+        self.rig.fit_scale(np.asarray(rest_positions, dtype=np.float64))
+        n_v, n_j = len(character.vertices), len(character.joint_names)
+        self.weights = np.zeros((n_v, n_j), dtype=np.float32)
+        np.add.at(self.weights, (np.repeat(np.arange(n_v), 4), character.joints.ravel()), character.weights.ravel())
+        self.faces = np.ascontiguousarray(character.faces, dtype=np.uint32)
+        self.colors = np.repeat(srgb_to_linear(color)[None], n_v, axis=0).astype(np.float32)
+
+    def vertices(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Vertex positions and normals ``(F, V, 3)`` float32 for the motion's joint positions ``(F, J, 3)``."""
+        R, pos = self.rig.pose(positions)
+        c = self.character
+        return skin(self.weights, c.vertices, c.normals, c.bind_positions, R, pos, self.rig.scale)
+
+
+class CharacterStyle(BodyStyle):
+    name = "character"
+    description = "a skinned glTF character (evalsuite's CC0 MakeHuman body, or --character FILE) driven by a joint map"
+
+    def __init__(self, character=None, joint_map=None):
+        self.character = character
+        self.joint_map = joint_map
+
+    def mesh(self, motion: Any, settings: Any, size: float) -> CharacterMesh:
+        path = self.character or getattr(settings, "character", None) or None
+        joint_map = self.joint_map or getattr(settings, "joint_map", None) or None
+        if joint_map is None and path:
+            beside = pathlib.Path(path).with_suffix(".joints.yaml")
+            joint_map = beside if beside.is_file() else None
+        return CharacterMesh(load_character(path), motion.joint_names, motion.positions(), joint_map=joint_map,
+                             motion_source=getattr(motion, "source", None))
+
+
+STYLE = CharacterStyle()
