@@ -43,14 +43,20 @@ def study():
 @click.option("--db", default=None, help="Also create the tables and store the plans in this "
               "database (needed before starting several gunicorn workers).")
 def build(study_file, out, db):
-    """Validate STUDY_FILE and write its balanced session plans."""
-    from study_app import design
+    """Validate STUDY_FILE, write the clips it derives (audio-mismatched, video-only) and its balanced session
+    plans."""
+    from study_app import derived, design
     from study_app.definition import load_study
 
     st = load_study(study_file)
+    made = derived.write_derived(st.manifest)     # audio-mismatched and video-only clips (study_app.derived)
+    if made:
+        click.echo(f"{len(made)} derived clip(s) written to {st.manifest.root / derived.DERIVED_FOLDER}")
     plans = design.build_plans(st)
     path = design.write_plans(plans, out or design.default_plans_path(st))
     click.echo(f"{len(plans['plans'])} session plans for study {st.id!r} -> {path}")
+    for line in derived.audio_balance_lines(plans, st):
+        click.echo(line)
     report = design.balance_report(plans, st)
     if report["pairs"]:
         click.echo("pairwise comparisons (block, A, B): times with A left / A right")

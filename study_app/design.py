@@ -24,7 +24,10 @@
 * a ``headphone_check`` page gets its own shuffled tone orders per session (the quiet tone in
   each position equally often, see :mod:`study_app.headphones`);
 * ``mismatched: true`` pairwise blocks pair each condition's matched video with its
-  mismatched one (same speech, motion from another segment); A is always the matched one.
+  mismatched one (same speech, motion from another segment); A is always the matched one;
+  ``audio_mismatch: true`` blocks pair it with the same motion under another segment's speech of the same
+  speaker (:mod:`study_app.derived`); A is the matched one, and each segment donates its speech once per
+  condition, so every speech segment is heard matched and mismatched equally often over the study.
 
 The plans refer to stimuli by manifest file name; they stay on the server.
 """
@@ -36,6 +39,7 @@ import pathlib
 import random
 from collections import Counter
 
+from study_app.derived import missing_derived
 from study_app.errors import StudyDefinitionError
 from study_app.model import Study
 from study_app.ordering import PositionBalancer, order_rng
@@ -191,6 +195,11 @@ def read_plans(path, study: Study) -> dict:
             or plans.get("manifest_sha256") != study.manifest.sha256):
         raise StudyDefinitionError("plans were built from another version of the study definition or "
                                    "manifest; run `evalsuite study build` again", path=path)
+    missing = missing_derived(study.manifest)
+    if missing:
+        raise StudyDefinitionError(f"{len(missing)} derived clip(s) (audio-mismatched or video-only, e.g. "
+                                   f"{missing[0]}) are missing or older than their sources; run `evalsuite study "
+                                   "build` again", path=study.manifest.root)
     return plans
 
 

@@ -27,6 +27,13 @@ class Stimulus:
     duration_s: float | None = None  # the clip's length (optional column; else read from the file)
     check: str = ""                 # attention checks: how it was made (``distorted_audio``, ``instruction``, ...)
     line: int = 0
+    audio_segment: str = ""         # derived audio-mismatched clips: the segment the speech comes from
+    silent: bool = False            # derived video-only clips (muted blocks): the file has no sound
+
+    @property
+    def audio_mismatched(self) -> bool:
+        """Motion of ``segment`` with another segment's speech (:mod:`study_app.derived`)."""
+        return bool(self.audio_segment) and self.audio_segment != self.segment
 
     @property
     def needs_sound(self) -> bool:
@@ -38,15 +45,32 @@ class Stimulus:
         return bool(self.motion_segment) and self.motion_segment != self.segment
 
 
+@dataclass(frozen=True)
+class DerivedClip:
+    """A clip ``study build`` makes from manifest clips (:mod:`study_app.derived`): the video stream of
+    ``video`` (copied, not re-encoded) with the sound of ``audio`` (AAC, cut or padded to ``seconds``), or
+    no sound when ``audio`` is empty."""
+
+    stimulus: Stimulus
+    video: str
+    audio: str = ""
+    seconds: float | None = None
+
+
 @dataclass
 class Manifest:
     path: pathlib.Path
     root: pathlib.Path              # folder the file names are relative to
     stimuli: list[Stimulus]
     sha256: str
+    # file -> clip made by `study build` (audio-mismatched and video-only variants; study_app.derived)
+    derived: dict[str, DerivedClip] = field(default_factory=dict)
 
     def by_file(self) -> dict[str, Stimulus]:
-        return {s.file: s for s in self.stimuli}
+        """Every clip a plan can name: the manifest's rows and the derived clips."""
+        out = {s.file: s for s in self.stimuli}
+        out.update((f, d.stimulus) for f, d in self.derived.items())
+        return out
 
 
 @dataclass

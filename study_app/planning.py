@@ -84,6 +84,7 @@ def block_plans(study: Study, plans: dict) -> list[dict]:
         if kind == "pairwise":
             shown = list(cfg["conditions"])
             pairs = ([(c, c + ":mismatched") for c in shown] if cfg["mismatched"]
+                     else [(c, c + ":audio_mismatched") for c in shown] if cfg["audio_mismatch"]
                      else [tuple(sorted(p)) for p in cfg["pairs"]])
             questions = [q["id"] for q in cfg["questions"]]
         elif kind == "mushra":

@@ -40,6 +40,8 @@ def _blocks(study: Study) -> list[str]:
         if b.type == "pairwise":
             what += ("; each condition's matched video against the same speech with another segment's motion "
                      f"(conditions {', '.join(c['conditions'])})" if c["mismatched"] else
+                     "; each condition's video with its own speech against the same motion with another segment's "
+                     f"speech of the same speaker (conditions {', '.join(c['conditions'])})" if c["audio_mismatch"] else
                      "; comparisons " + ", ".join(f"{x} vs {y}" for x, y in c["pairs"]))
             what += f"; {c['levels']}-level answers"
         elif b.type == "mushra":

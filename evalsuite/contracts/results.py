@@ -12,11 +12,12 @@ COLUMNS = ("study", "participant", "platform", "session", "session_status", "pag
            "trial", "question", "scale", "segment", "condition", "condition_a", "condition_b",
            "position_a", "answer", "strength", "role", "rt_ms", "is_training", "is_attention_check",
            "attention_expected", "attention_passed", "shown_at", "answered_at", "reasons",
-           "playback_implausible", "playback_reason")
+           "playback_implausible", "playback_reason", "audio_a", "audio_b")
 # Optional: ``playback_implausible`` (0/1, empty for pages without media) is the study server's judgement that
 # a page's media were not really played (a video never fetched, or less time on the page than the clips
 # last); ``playback_reason`` says why (e.g. ``unwatched: bytes 1/2,345,678 served``); ``evalsuite analyze``
-# can exclude sessions on it and reports the reasons.
+# can exclude sessions on it and reports the reasons. ``audio_a``/``audio_b`` (pairwise): the speech segment
+# each side's video played (empty in a muted block); they differ on audio-mismatch pages.
 # Columns the analysis cannot do without.
 REQUIRED = ("study", "participant", "session", "session_status", "page", "page_type", "question",
             "condition", "condition_a", "condition_b", "answer", "is_training", "is_attention_check",

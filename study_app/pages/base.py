@@ -269,10 +269,12 @@ def segment_for(g: int, n_items: int, segments: list[str]) -> str:
 
 def export_condition(stim: Stimulus) -> str:
     """The condition a results row names: the manifest's, ``:mismatched`` appended for mismatched
-    stimuli, ``attention_check`` for an attention stimulus without one."""
+    stimuli, ``:audio_mismatched`` for audio-mismatched ones (:mod:`study_app.derived`),
+    ``attention_check`` for an attention stimulus without one."""
     if stim.kind == "attention":
         return stim.condition or "attention_check"
-    return stim.condition + (":mismatched" if stim.mismatched else "")
+    return stim.condition + (":mismatched" if stim.mismatched else ":audio_mismatched" if stim.audio_mismatched
+                             else "")
 
 
 def ab(side: str, position_a: str) -> str:

@@ -1,10 +1,14 @@
 """``pairwise``: two videos side by side, one or more questions with 3 or 5 answer levels, optional
-reasons (required when a side is preferred, as HEMVIP/GENEA 2023 ask), matched-vs-mismatched blocks."""
+reasons (required when a side is preferred, as HEMVIP/GENEA 2023 ask), matched-vs-mismatched blocks (other
+motion, this speech), audio-mismatch blocks (this motion, another segment's speech of the same speaker; the
+GENEA Leaderboard's) and muted blocks served as video-only files (:mod:`study_app.derived`)."""
 from __future__ import annotations
 
 import re
 from typing import Any
 
+from study_app import derived
+from study_app.adaptive import adaptive_options, adaptive_record
 from study_app.ordering import balanced_sides
 from study_app.pages.base import BlockKind, Media, Outcome, ab, check_cols, export_condition, segment_for
 from study_app.payload import PayloadError, only_keys, require_dict
@@ -41,11 +45,31 @@ def screen_side(choice: str) -> tuple[str, str]:
 
 class PairwiseKind(BlockKind):
     name = "pairwise"
-    keys = BlockKind.keys + ("pairs", "mismatched", "levels", "questions", "reasons", "reasons_required")
+    keys = BlockKind.keys + ("pairs", "mismatched", "audio_mismatch", "speakers", "levels", "questions", "reasons",
+                             "reasons_required", "adaptive", "exploration")
     script = "pages/pairwise.js"
 
     def min_conditions(self, page: dict) -> int:
-        return 1 if page.get("mismatched") else 2
+        return 1 if page.get("mismatched") or page.get("audio_mismatch") else 2
+
+    def load(self, chk: Any, page: dict, where: str, study: Any) -> dict:
+        """The settings, then the clips ``study build`` derives (:mod:`study_app.derived`): audio-mismatched
+        clips of an ``audio_mismatch`` block, video-only copies of a muted block's clips."""
+        cfg = super().load(chk, page, where, study)
+        block_id = page["id"] if isinstance(page.get("id"), str) else ""
+        if cfg["audio_mismatch"]:
+            groups = derived.load_speakers(chk, page.get("speakers"), where, cfg["segments"])
+            cfg["audio_mismatched"] = derived.register_audio_mismatch(study.manifest, block_id, cfg["conditions"],
+                                                                      groups, study.seed)
+        elif "speakers" in page:
+            chk.fail(f"{where}.speakers", "only used with audio_mismatch: true")
+        cfg["silent"] = {}
+        if cfg["muted"]:
+            # every clip a page or a practice page of the block can show (any segment: practice may use others)
+            files = [s.file for s in study.manifest.stimuli if s.kind == "stimulus" and s.condition in cfg["conditions"]]
+            files += [s.file for s in self.attention_pool(study.manifest, block_id, cfg)]
+            cfg["silent"] = derived.register_silent(study.manifest, files)
+        return cfg
 
     def needs_mismatched(self, cfg: dict) -> bool:
         return bool(cfg["mismatched"])
@@ -53,6 +77,13 @@ class PairwiseKind(BlockKind):
     def load_options(self, chk: Any, page: dict, where: str, cfg: dict, known: list[str]) -> None:
         conditions = cfg["conditions"]
         cfg["mismatched"] = chk.get(page, "mismatched", where, bool, default=False)
+        cfg["audio_mismatch"] = chk.get(page, "audio_mismatch", where, bool, default=False)
+        if cfg["audio_mismatch"] and cfg["mismatched"]:
+            chk.fail(f"{where}.audio_mismatch", "not with mismatched: true; expected one design per block "
+                     "(mismatched: other motion, this speech; audio_mismatch: this motion, other speech)")
+        if cfg["audio_mismatch"] and cfg["muted"]:
+            chk.fail(f"{where}.muted", "not with audio_mismatch: true: the design compares speech, so it needs "
+                     "sound")
         cfg["levels"] = chk.get(page, "levels", where, int, default=3, expected="3 or 5")
         if cfg["levels"] not in (3, 5):
             chk.fail(f"{where}.levels", f"expected 3 or 5, got {cfg['levels']}")
@@ -63,9 +94,10 @@ class PairwiseKind(BlockKind):
         if cfg["reasons_required"] and not cfg["reasons"]:
             chk.fail(f"{where}.reasons_required", "needs a list of reasons to choose from")
         pairs = chk.get(page, "pairs", where, list, default=None, expected="a list of [condition, condition]")
-        if cfg["mismatched"]:
+        adaptive_options(chk, page, where, cfg)         # adaptive pair selection (study_app.adaptive)
+        if cfg["mismatched"] or cfg["audio_mismatch"]:
             if pairs is not None:
-                chk.fail(f"{where}.pairs", "not allowed with mismatched: true (each page pairs one "
+                chk.fail(f"{where}.pairs", "not allowed with mismatched or audio_mismatch (each page pairs one "
                          "condition's matched and mismatched video)")
             return
         if pairs is None:
@@ -82,23 +114,21 @@ class PairwiseKind(BlockKind):
 
     def regular_page(self, block: Any, g: int, lookup: Any, segments: list[str]) -> dict:
         cfg = block.cfg
+        items = cfg["conditions"] if cfg["mismatched"] or cfg["audio_mismatch"] else cfg["pairs"]
+        item = items[g % len(items)]
+        seg = segment_for(g, len(items), segments)
         if cfg["mismatched"]:
-            conds = cfg["conditions"]
-            cond = conds[g % len(conds)]
-            seg = segment_for(g, len(conds), segments)
-            a, b = lookup.file(cond, seg), lookup.file(cond, seg, mismatched=True)
-            occurrence = g // len(conds)
+            a, b = lookup.file(item, seg), lookup.file(item, seg, mismatched=True)
+        elif cfg["audio_mismatch"]:
+            a, b = lookup.file(item, seg), cfg["audio_mismatched"][(item, seg)]
         else:
-            pairs = cfg["pairs"]
-            x, y = pairs[g % len(pairs)]
-            seg = segment_for(g, len(pairs), segments)
-            a, b = lookup.file(x, seg), lookup.file(y, seg)
-            occurrence = g // len(pairs)
+            a, b = lookup.file(item[0], seg), lookup.file(item[1], seg)
         # Alternates for every item (balance) and differs between neighbouring items (so one session
         # does not show every A on the same side).
-        n_items = len(cfg["conditions"] if cfg["mismatched"] else cfg["pairs"])
-        flip = (occurrence + g % n_items) % 2
-        return {"type": "pairwise", "segment": seg, "a": a, "b": b, "position_a": "left" if flip == 0 else "right"}
+        flip = (g // len(items) + g % len(items)) % 2
+        silent = cfg["silent"]
+        return {"type": "pairwise", "segment": seg, "a": silent.get(a, a), "b": silent.get(b, b),
+                "position_a": "left" if flip == 0 else "right"}
 
     def check_page(self, block: Any, k: int, pool: list, lookup: Any) -> dict:
         cfg = block.cfg
@@ -106,7 +136,9 @@ class PairwiseKind(BlockKind):
         conds = cfg["conditions"]
         partner_seg = check.segment if check.segment in cfg["segments"] else cfg["segments"][0]
         partner = lookup.file(conds[k % len(conds)], partner_seg)
-        return {"type": "pairwise", "segment": check.segment, "a": check.file, "b": partner,
+        silent = cfg["silent"]
+        return {"type": "pairwise", "segment": check.segment, "a": silent.get(check.file, check.file),
+                "b": silent.get(partner, partner),
                 "position_a": "left" if (k // len(pool)) % 2 == 0 else "right", "check": True}
 
     def arrange(self, block: Any, pages: list[dict], rng: Any, by_file: dict) -> None:
@@ -124,7 +156,7 @@ class PairwiseKind(BlockKind):
         if spec["check"]:
             return
         a, b = by_file[spec["a"]], by_file[spec["b"]]
-        key = (spec["block"], a.condition, b.condition + (":mismatched" if b.mismatched else ""))
+        key = (spec["block"], a.condition, export_condition(b))
         counts["pairs"][key + (spec["position_a"],)] += 1
 
     def n_slots(self, spec: dict) -> int:
@@ -156,7 +188,10 @@ class PairwiseKind(BlockKind):
             raise PayloadError("answer.reasons: expected a list of reason ids of this page")
         if block["reasons_required"] and not reasons and any(c != "equal" for c in choices.values()):
             raise PayloadError("answer.reasons: please tick at least one reason for your preference")
-        return {"choices": {q: choices[q] for q in qids}, "reasons": sorted(set(reasons))}
+        out = {"choices": {q: choices[q] for q in qids}, "reasons": sorted(set(reasons))}
+        if "chosen" in spec:        # an adaptive page: what its estimate learns (study_app.adaptive)
+            out["adaptive"] = adaptive_record(spec, study.manifest.by_file(), screen_side(choices[qids[0]])[0])
+        return out
 
     def outcome(self, study: Any, spec: dict, data: dict) -> Outcome:
         if not spec.get("check"):
@@ -183,11 +218,18 @@ class PairwiseKind(BlockKind):
                          "condition_b": export_condition(b), "position_a": spec["position_a"],
                          "answer": ab(side, spec["position_a"]), "strength": strength,
                          "reasons": ";".join(answer.data.get("reasons", [])),
+                         "audio_a": _audio(a, block), "audio_b": _audio(b, block),
                          **check_cols(spec, answer, expected)})
         return rows
 
     def comparison_label(self, row: dict) -> str:
         return f"{row['condition_a']} vs {row['condition_b']}"
+
+
+def _audio(stim: Any, block: dict) -> str:
+    """The speech segment a clip played (empty in a muted block): the audio-mismatched clip's donor, else
+    the clip's own segment."""
+    return "" if block["muted"] or stim.silent else (stim.audio_segment or stim.segment)
 
 
 KIND = PairwiseKind()
