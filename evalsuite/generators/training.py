@@ -10,6 +10,7 @@ callback (a tqdm bar with the latest losses), then writes beside the plug-in's o
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import hashlib
 import json
@@ -20,6 +21,7 @@ from typing import Any
 
 from evalsuite.corpus.types import Corpus
 from evalsuite.errors import InputError
+from evalsuite.generators.checkpoints import check_run, parse_every, session
 from evalsuite.generators.contract import GeneratorError, TrainingResult
 from evalsuite.generators.presets import DEFAULT_PRESET, apply_preset
 from evalsuite.generators.provenance import package_versions
@@ -44,9 +46,12 @@ def corpus_summary(corpus: Corpus) -> dict[str, Any]:
 
 def train(entry: GeneratorEntry, corpus: Corpus, out_dir: str | pathlib.Path, *, seed: int = 0,
           budget_minutes: float | None = None, config: Mapping[str, Any] | None = None,
-          progress: bool = True, preset: str = DEFAULT_PRESET) -> TrainingResult:
+          progress: bool = True, preset: str = DEFAULT_PRESET, checkpoint_every: str | None = None,
+          resume: bool = False) -> TrainingResult:
     """Fit ``entry``'s generator on ``corpus`` and write the model folder ``out_dir`` (see the module doc).
-    ``preset`` (:mod:`evalsuite.generators.presets`) sets options under ``config``'s."""
+    ``preset`` (:mod:`evalsuite.generators.presets`) sets options under ``config``'s. ``checkpoint_every``
+    (``"10m"``, ``"5"`` epochs) saves the re-implementations' loops in ``out_dir/checkpoints`` and ``resume`` carries
+    on from them (:mod:`evalsuite.generators.checkpoints`)."""
     from tqdm import tqdm
 
     assert entry.spec is not None
@@ -56,6 +61,7 @@ def train(entry: GeneratorEntry, corpus: Corpus, out_dir: str | pathlib.Path, *,
         raise InputError(f"the budget must be a positive number of minutes, got {budget_minutes}",
                          field="--budget-minutes")
     out = pathlib.Path(out_dir)
+    fresh = not out.exists() or not any(out.iterdir())
     out.mkdir(parents=True, exist_ok=True)
     gen = generator_class(entry.target)()
     gen.configure(apply_preset(entry.spec.name, preset, config or {}))
@@ -66,13 +72,22 @@ def train(entry: GeneratorEntry, corpus: Corpus, out_dir: str | pathlib.Path, *,
         bar.set_postfix({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in row.items()
                          if k in ("stage", "train_loss", "val_loss")})
 
+    every = parse_every(checkpoint_every)
+    checkpointing = every is not None or resume
+    if checkpointing:
+        check_run(out, {"generator": entry.spec.name, "config": dict(gen.config), "seed": seed, "preset": preset},
+                  resume)
     t0 = time.perf_counter()
     try:
-        result = gen.fit(corpus, out, seed=seed, budget_minutes=budget_minutes, progress=on_epoch)
+        with session(out, every, resume) if checkpointing else contextlib.nullcontext() as ck:
+            result = gen.fit(corpus, out, seed=seed, budget_minutes=budget_minutes, progress=on_epoch)
+        if ck is not None and ck.resumed:
+            result.meta["resumed_stages"] = ck.resumed
     finally:
         bar.close()
         gen.close()
     seconds = time.perf_counter() - t0
+    _guard_divergence(entry, corpus, out, gen.config, result.history, fresh, time.time() - seconds)
     files = {p.relative_to(out).as_posix(): file_sha256(p) for p in sorted(out.rglob("*"))
              if p.is_file() and p.name not in ("model.json", "train_log.csv")}
     record = {"format": MODEL_FORMAT, "generator": entry.spec.as_dict(), "target": entry.target,
@@ -87,6 +102,29 @@ def train(entry: GeneratorEntry, corpus: Corpus, out_dir: str | pathlib.Path, *,
             writer.writeheader()
             writer.writerows(result.history)
     return result
+
+
+def _guard_divergence(entry: GeneratorEntry, corpus: Corpus, out: pathlib.Path, config: Mapping[str, Any],
+                      history: list[dict[str, Any]], fresh: bool, started: float) -> None:
+    """Stop with a :class:`DivergenceError` when the loss or the output scale diverged
+    (:mod:`evalsuite.generators.divergence`), removing what the training wrote: the whole folder when it was new,
+    else the files written since ``started`` and ``model.json``."""
+    import shutil
+
+    from evalsuite.generators.divergence import DivergenceError, loss_divergence, output_divergence
+
+    reason = loss_divergence(history) or output_divergence(entry, corpus, out, config)
+    if reason is None:
+        return
+    if fresh:
+        shutil.rmtree(out, ignore_errors=True)
+    else:
+        for p in [*out.rglob("*"), out / "model.json"]:
+            if p.is_file() and (p.name == "model.json" or p.stat().st_mtime >= started - 1.0):
+                p.unlink()
+    assert entry.spec is not None
+    raise DivergenceError(f"{entry.spec.name}: the training diverged ({reason}); no model was written. Lower the "
+                          f"learning rate or check the corpus", field="training")
 
 
 def read_model_json(model_dir: pathlib.Path, generator: str) -> dict[str, Any]:
