@@ -209,11 +209,18 @@ def generate_command(name: str, corpus: str | None, split: str, segments: tuple[
 @click.option("--preset", type=click.Choice(PRESETS), default=DEFAULT_PRESET, show_default=True,
               help="Named configuration: cpu-small (evalsuite's variant, small and fast on a CPU) or paper (the "
                    "system as its paper describes it); --set/--config options override it. docs/generators.md.")
+@click.option("--checkpoint-every", default="10m", show_default=True, metavar="N|Xm",
+              help="Save the training's state in OUT/checkpoints every N epochs (steps) or every X minutes (10m), "
+                   "and at the end of each stage; 'off': no checkpoints. Removed when training ends.")
+@click.option("--resume", is_flag=True,
+              help="Carry on from OUT/checkpoints (same generator, options, seed and preset): a killed training "
+                   "resumed ends with the same weights as one that ran through.")
 @on_mismatch_option
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of weights, data order and noise.")
 @click.option("-o", "--out", required=True, type=click.Path(file_okay=False), help="Model folder to write.")
 def train_command(name: str, corpus: str, config_file: str | None, settings: tuple[str, ...],
-                  budget_minutes: float | None, preset: str, seed: int, out: str) -> None:
+                  budget_minutes: float | None, preset: str, checkpoint_every: str, resume: bool, seed: int,
+                  out: str) -> None:
     """Train a generator on a corpus's train split (validation loss on its val split each epoch); writes a
     model folder with model.json (everything needed to use it) and train_log.csv.
 
@@ -224,7 +231,9 @@ def train_command(name: str, corpus: str, config_file: str | None, settings: tup
 
     entry = find_generator(name)
     result = train(entry, _load_corpus(corpus), out, seed=seed, budget_minutes=budget_minutes,
-                   config=read_config(config_file, settings), preset=preset)
+                   config=read_config(config_file, settings), preset=preset,
+                   checkpoint_every=None if checkpoint_every.strip().lower() == "off" else checkpoint_every,
+                   resume=resume)
     last = result.history[-1] if result.history else {}
     losses = ", ".join(f"{k} {v:.4g}" for k, v in last.items() if k.endswith("loss") and isinstance(v, float))
     click.echo(f"{name}: {len(result.history)} epochs" + (f" (last: {losses})" if losses else "") + f"; model in {out}")

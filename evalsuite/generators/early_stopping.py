@@ -37,6 +37,14 @@ class BestWeights:
             return True
         return False
 
+    def state_dict(self) -> dict[str, Any]:
+        """What a checkpoint keeps (:mod:`evalsuite.generators.checkpoints`): the best loss and weights, the
+        best epoch's record and the epochs since."""
+        return {"best": self.best, "state": self.state, "record": self.record, "since": self.since}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.best, self.state, self.record, self.since = state["best"], state["state"], state["record"], state["since"]
+
     def restore(self) -> None:
         """Load the best epoch's weights (when there was a validation loss) and mark that epoch."""
         if self.state is not None and self.record is not None:

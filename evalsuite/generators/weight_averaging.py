@@ -34,6 +34,14 @@ class WeightAverage(Generic[NetT]):
             self._averaged = AveragedModel(net, multi_avg_fn=get_ema_multi_avg_fn(decay), use_buffers=True)
         self.module: NetT = cast(NetT, self._averaged.module) if self._averaged is not None else net
 
+    def state_dict(self) -> dict:
+        """The average's weights and count (empty with ``decay`` 0), for checkpoints."""
+        return self._averaged.state_dict() if self._averaged is not None else {}
+
+    def load_state_dict(self, state: dict) -> None:
+        if self._averaged is not None:
+            self._averaged.load_state_dict(state)
+
     def update(self, net: NetT) -> None:
         """Fold ``net``'s current weights into the average (call after every optimiser step)."""
         if self._averaged is not None:

@@ -14,6 +14,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from evalsuite.generators import checkpoints
 from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
 from evalsuite.generators.aud2repr2pose.systems import SYSTEMS
 from evalsuite.generators.early_stopping import BestWeights
@@ -89,7 +90,10 @@ def train_dae(poses: Sequence[np.ndarray], code_dim: int, *, epochs: int = 20, b
     dae = MotionDAE(x.shape[1] // 2 if velocities else x.shape[1], code_dim, noise, velocities=velocities)
     dae.feature_std.copy_(x.std(0).clamp_min(1e-6))
     opt = torch.optim.Adam(dae.parameters(), lr=learning_rate)
-    for epoch in range(epochs):
+    ck = checkpoints.current()
+    state = {"dae": dae, "opt": opt, "rng": rng}
+    first, done = ck.start("autoencoder", state)
+    for epoch in range(first, first if done else epochs):
         dae.train()
         total = 0.0
         for idx in _epochs(len(x), batch_size, rng):
@@ -100,6 +104,7 @@ def train_dae(poses: Sequence[np.ndarray], code_dim: int, *, epochs: int = 20, b
             total += loss.item() * len(idx)
         if on_epoch is not None:
             on_epoch({"stage": "autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)})
+        ck.step("autoencoder", epoch + 1, state, done=epoch + 1 == epochs)
     dae.eval()
     return dae
 
@@ -199,7 +204,10 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             return float(nn.functional.mse_loss(judged(val[0]), val[1]))
         err = [_decoded(judged, dae, x) - y for x, y in whole]
         return float(sum(float((e ** 2).sum()) for e in err) / sum(e.numel() for e in err))
-    for epoch in range(epochs):
+    ck = checkpoints.current()  # resumable: everything the next epoch depends on
+    state = {"net": net, "opt": opt, "average": averaged, "best": best, "history": history, "rng": rng}
+    first, done = ck.start("speech", state)
+    for epoch in range(first, first if done else epochs):
         for group in opt.param_groups:
             group["lr"] = learning_rate_at(lr_schedule, learning_rate, epoch, epochs)
         net.train()
@@ -221,10 +229,11 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
         stop = best.update(record)
         if on_epoch is not None:
             on_epoch(record)
-        if stop:
-            break
-        if budget_seconds is not None and time.perf_counter() - start > budget_seconds:
+        if not stop and budget_seconds is not None and time.perf_counter() - start > budget_seconds:
             record["stopped"] = "time budget spent"
+            stop = True
+        ck.step("speech", epoch + 1, state, done=stop or epoch + 1 == epochs)
+        if stop:
             break
     best.restore()
     judged.eval()

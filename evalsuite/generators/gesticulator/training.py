@@ -21,6 +21,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from evalsuite.generators import checkpoints
 from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
 from evalsuite.generators.scaling import floored_spread
@@ -176,8 +177,11 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
     history: list[dict] = []
     averaged = WeightAverage(net, ema)
     best = BestWeights(averaged.module, patience)
+    ck = checkpoints.current()  # resumable: everything the next epoch depends on
+    state = {"net": net, "opt": opt, "average": averaged, "best": best, "history": history, "rng": rng}
+    first, done = ck.start("gesticulator", state)
     start = time.perf_counter()
-    for epoch in range(schedule.epochs):
+    for epoch in range(first, first if done else schedule.epochs):
         autoregressive, period = schedule.stage(epoch)
         for group in opt.param_groups:
             group["lr"] = schedule.learning_rate_at(epoch)
@@ -208,10 +212,11 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
         stop = best.update(record)
         if on_epoch is not None:
             on_epoch(record)
-        if stop:
-            break
-        if budget_seconds is not None and time.perf_counter() - start > budget_seconds:
+        if not stop and budget_seconds is not None and time.perf_counter() - start > budget_seconds:
             record["stopped"] = "time budget spent"
+            stop = True
+        ck.step("gesticulator", epoch + 1, state, done=stop or epoch + 1 == schedule.epochs)
+        if stop:
             break
     best.restore()
     net = averaged.module
