@@ -95,10 +95,12 @@ def create_app(config: dict) -> Flask:
     app.jinja_env.globals["page_kind"] = get_kind     # templates ask a kind e.g. for its media word
 
     from study_app.admin import bp as admin_bp
+    from study_app.calibration import bp as calibration_bp
     from study_app.media import bp as media_bp
     from study_app.participant import bp as participant_bp
     app.register_blueprint(participant_bp)
     app.register_blueprint(media_bp)
+    app.register_blueprint(calibration_bp)
     app.register_blueprint(admin_bp, url_prefix="/admin")
 
     @app.errorhandler(CSRFError)

@@ -274,8 +274,11 @@ def answer(sid, index):
     if status is SubmitStatus.AHEAD:
         return jsonify(error="this page is not open yet; answer the current page first", next=nxt), 409
     if status is SubmitStatus.CONFLICT:
-        return jsonify(error="this page was already answered; the stored answer is kept",
-                       next=nxt), 409
+        # another tab or window of this session answered the page first (or the session ended there): the
+        # stored answer is kept; ``stale`` tells the page to warn and load the current page
+        return jsonify(error="this page was already answered in another tab or window; the answer given "
+                       "there is kept", next=nxt, stale=True, current_page=sess.current_page,
+                       session_status=sess.status), 409
     extra = {}
     if ans is not None and ans.events_dropped:
         extra["events_dropped"] = ans.events_dropped
@@ -303,7 +306,8 @@ def draft(sid, index):
     except PayloadError as exc:
         return jsonify(error=str(exc)), 422
     ok = _store().save_draft(sid, index, d)
-    return (jsonify(saved=True), 200) if ok else (jsonify(error="not the current page"), 409)
+    return (jsonify(saved=True), 200) if ok else (jsonify(error="not the current page", stale=True,
+                                                           next=url_for("participant.page", sid=sid)), 409)
 
 
 def _check_draft(d, depth=0):

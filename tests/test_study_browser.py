@@ -130,7 +130,14 @@ class Driver:
             self.page.fill("#q-age", str(answer["age"]))
             self.page.select_option("#q-gender", answer["gender"])
             self.page.fill("#q-comments", answer["comments"])
-        elif t in ("pairwise", "mushra", "likert", "headphone_check"):
+        elif t == "headphone_check":
+            # step 1: the calibration noise sets the volume; only then do the trials play
+            assert self.page.is_disabled("button.play[data-slot='0']")
+            self.page.click("#calibration-play")
+            self.page.wait_for_selector("#calibration-done:not([disabled])")
+            self.page.click("#calibration-done")
+            self.play_all()
+        elif t in ("pairwise", "mushra", "likert"):
             self.play_all()
         if t == "headphone_check":
             # each sound is heard once: after playing, no button can play it again

@@ -178,6 +178,9 @@ def test_each_outcome_reaches_prolific_with_its_code_in_chromium(browser_env, ou
             _next(page)
             sid = page.url.split("/s/")[1].strip("/")
             spec = h.plan_pages(app, sid)[2]
+            page.click("#calibration-play")            # step 1: set the volume with the calibration noise
+            page.wait_for_selector("#calibration-done:not([disabled])")
+            page.click("#calibration-done")
             for k in range(len(spec["trials"])):
                 page.click(f"button.play[data-slot='{k}']")
                 page.wait_for_selector(f".status[data-slot='{k}'].ok")

@@ -20,6 +20,8 @@
   var busy = false;
   var started = false;   // the participant has done something on this page
   var leaving = false;   // the answer was stored: navigation is expected
+  var confirmed = false; // the participant chose to leave in the page's own dialog (Back)
+  var G = window.EvalsuiteGuard;
   var MAX_BATCH = 1500;  // the server takes at most 2000 events per request
 
   function rid() {
@@ -64,7 +66,7 @@
       var playing = videos.some(function (o) { return !o.paused && !o.ended; });
       videos.forEach(function (o) {
         var s = Number(o.getAttribute("data-slot")), ob = button(s);
-        if (ob) ob.disabled = playing || startedSlots.has(s) || done.has(s);
+        if (ob) ob.disabled = playing || startedSlots.has(s) || done.has(s) || ob.hasAttribute("data-wait");
       });
       return;
     }
@@ -119,6 +121,8 @@
   // the question and Next are visible without scrolling; a page too long for that keeps larger videos
   var MIN_VIDEO_H = 96;
   var fitQueued = false;
+  // phones: pairwise and MUSHRA grid videos are stacked at full width (study.css) and the page scrolls
+  var narrow = window.matchMedia ? window.matchMedia("(max-width: 640px)") : null;
   function visibleVideos() {
     return videos.filter(function (v) { return v.tagName === "VIDEO" && v.offsetParent !== null; });
   }
@@ -127,6 +131,7 @@
     var vids = visibleVideos();
     if (!vids.length) return;
     form.style.setProperty("--video-max-h", Math.max(MIN_VIDEO_H, window.innerHeight) + "px");
+    if (narrow && narrow.matches && form.querySelector(".players.two, .players.grid")) return;
     for (var i = 0; i < 4; i++) {
       var over = document.documentElement.scrollHeight - window.innerHeight;
       if (over <= 0) break;
@@ -252,7 +257,11 @@
   var saveTimer = null;
   function saveDraft(keepalive) {
     saveTimer = null;
-    post(data.draft_url, {draft: snapshot()}, keepalive).catch(function () {});
+    post(data.draft_url, {draft: snapshot()}, keepalive).then(function (r) {
+      // 409 "stale": the session moved on in another tab or window; this tab warns and catches up
+      if (r.status !== 409 || busy || leaving || keepalive) return;
+      return r.json().then(function (j) { if (j.stale && !busy && !leaving) { leaving = true; G.stale(j.next); } });
+    }).catch(function () {});
   }
   function scheduleSave() {
     clearTimeout(saveTimer);
@@ -279,9 +288,15 @@
     if (saveTimer !== null) { clearTimeout(saveTimer); saveDraft(true); }
     // keepalive bodies are limited to 64 kB: a few hundred events
     if (queue.length) post(data.events_url, {events: queue.splice(0, 300)}, true).catch(function () {});
-    if (!started) return;
+    if (!started || confirmed) return;
     ev.preventDefault();
     ev.returnValue = "";   // older browsers need a value to show the prompt
+  });
+
+  // Back: the page's own dialog asks first (static/guard.js); leaving saves what is pending
+  G.guard(function () {
+    confirmed = true;
+    if (saveTimer !== null) { clearTimeout(saveTimer); saveDraft(true); }
   });
 
   // ---- submit: one token per page, reused by every retry, so the server stores one answer
@@ -306,7 +321,13 @@
           var j = await r.json();
           sessionStorage.removeItem(tokenKey);
           leaving = true;
-          window.location.assign(j.next);
+          if (j.stale) {     // answered in another tab or window first: nothing of this tab's is stored
+            msg.textContent = j.error;
+            msg.setAttribute("data-kind", "error");
+            G.stale(j.next);
+          } else {
+            G.go(j.next);
+          }
           return;
         }
         if (r && r.status >= 400 && r.status < 500) {
