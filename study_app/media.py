@@ -5,20 +5,46 @@ The URL never carries a file name: the server looks the blinded file up in the
 participant's own plan and serves it from the manifest's folder with
 ``send_from_directory`` (which refuses any path outside it). Range requests work, so
 browsers can seek. Only pages up to the participant's current page are served.
+
+Who sends a stimulus file's bytes is the app's config ``MEDIA_SERVER`` (environment
+``EVALSUITE_MEDIA_SERVER``): ``app`` (the default; no front server needed) sends them from the application
+thread; ``nginx`` answers the authorised request with ``X-Accel-Redirect`` and nginx sends the file
+(:mod:`study_app.media_nginx`), so a slow client never holds an application worker. ``MEDIA_ACCESS_LOG``
+(``EVALSUITE_MEDIA_ACCESS_LOG``) is nginx's media log, read into the playback record (docs/deploy.md).
+Generated media (headphone-check sounds, small) is always sent by the app.
 """
 from __future__ import annotations
 
 import hashlib
 import hmac
+import os
 
 from flask import Blueprint, Response, abort, current_app, request, send_from_directory
 
-from study_app.context import get_store, get_study
+from study_app.context import get_store, get_study, store_of
+from study_app.errors import StudyStateError
+from study_app.media_nginx import accel_path
 from study_app.pages import get_kind
 from study_app.participant import _own
 from study_app.served import fully_served, record_served
 
 bp = Blueprint("media", __name__)
+MEDIA_SERVERS = ("app", "nginx")
+
+
+@bp.record_once
+def _configure(state) -> None:
+    """Check ``MEDIA_SERVER`` once and hand ``MEDIA_ACCESS_LOG`` to the store's media log."""
+    config, env = state.app.config, os.environ
+    server = config.setdefault("MEDIA_SERVER", env.get("EVALSUITE_MEDIA_SERVER") or "app")
+    if server not in MEDIA_SERVERS:
+        raise StudyStateError(f"expected one of {', '.join(MEDIA_SERVERS)}, got {server!r}", field="MEDIA_SERVER")
+    access_log = config.setdefault("MEDIA_ACCESS_LOG", env.get("EVALSUITE_MEDIA_ACCESS_LOG"))
+    if server == "nginx" and not access_log:
+        raise StudyStateError("MEDIA_SERVER is nginx: set nginx's media log (deploy/nginx/evalsuite.conf.template) "
+                              "so that the playback record knows the bytes sent", field="MEDIA_ACCESS_LOG")
+    if access_log:
+        store_of(state.app).media_log.access_log = access_log
 
 
 def _opaque_etag(sid: str, index: int, slot: int) -> str:
@@ -54,6 +80,13 @@ def video(sid, index, slot):
         return resp
     if media.file not in study.manifest.by_file():
         abort(404)
+    if current_app.config["MEDIA_SERVER"] == "nginx":
+        # nginx sends the file and logs the bytes it sent (study_app.media_nginx); nothing of the file's
+        # name reaches the participant: nginx drops Last-Modified and ETag there (deploy/nginx).
+        resp = Response(b"", mimetype=media.mimetype)
+        resp.headers["X-Accel-Redirect"] = accel_path(media.file)
+        resp.headers["Cache-Control"] = "private, no-store"
+        return resp
     resp = send_from_directory(study.manifest.root, media.file, mimetype=media.mimetype, conditional=True,
                                max_age=0, etag=_opaque_etag(sid, index, slot))
     # Blinding: nothing a participant receives may come from a stimulus file's name, time or render

@@ -6,11 +6,17 @@ survives a crash of the server, not of the machine; PostgreSQL ``synchronous_com
 without waiting for the write lock either: when another writer holds it, the record is queued and a
 background thread of the process writes the queue in one transaction a moment later. A server killed in
 that moment loses those records (the page may then be flagged); answers are never written this way.
+
+The bytes sent per media response (``media_served``, :mod:`study_app.served`) go through the same writer
+(:meth:`MediaLog.served`), so a video response never waits for a write lock either. Behind nginx
+(``MEDIA_SERVER = "nginx"``) the app does not send the bytes: :meth:`flush` first reads what nginx logged
+(:mod:`study_app.media_nginx`, ``access_log``).
 """
 from __future__ import annotations
 
 import atexit
 import logging
+import os
 import sqlite3
 import threading
 import time
@@ -23,14 +29,19 @@ __all__ = ["MediaLog"]
 
 log = logging.getLogger(__name__)
 INSERT = ("INSERT OR IGNORE INTO media_requests (session_id, page_index, slot, first_at) VALUES (?, ?, ?, ?)")
+INSERT_SERVED = ("INSERT INTO media_served (session_id, page_index, slot, first_byte, last_byte, total, status, "
+                 "served_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?)")
 
 
 class MediaLog:
-    def __init__(self, engine, session_factory, model) -> None:
-        self.engine, self.Session, self.model = engine, session_factory, model
+    def __init__(self, engine, session_factory, model, access_log: str | None = None) -> None:
+        """``access_log``: nginx's media log to read on :meth:`flush` (default ``EVALSUITE_MEDIA_ACCESS_LOG``)."""
+        from study_app.storage.tables import MediaServed  # not at the top: the storage package imports this
+        self.engine, self.Session, self.model, self.served_model = engine, session_factory, model, MediaServed
+        self.access_log = access_log or os.environ.get("EVALSUITE_MEDIA_ACCESS_LOG") or None
         self.sqlite = engine.dialect.name == "sqlite"
         self.recorded: set[tuple[str, int, int]] = set()
-        self._pending: list[tuple[str, int, int, object]] = []
+        self._pending: list[tuple[str, tuple]] = []        # (SQLite statement, row)
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         _LOGS.add(self)
@@ -42,8 +53,8 @@ class MediaLog:
         row = (*key, now)
         try:
             if self.sqlite:
-                if not self._sqlite_insert([row], wait=False):
-                    self._defer(row)
+                if not self._sqlite_insert(INSERT, [row], wait=False):
+                    self._defer(INSERT, row)
             elif self.engine.dialect.name == "postgresql":
                 from sqlalchemy.dialects.postgresql import insert as pg_insert
                 with self.Session.begin() as db:
@@ -64,19 +75,48 @@ class MediaLog:
             self.recorded.clear()
         self.recorded.add(key)
 
-    def flush(self) -> None:
-        """Write what is queued now (exports call this, so that they see this process's records)."""
-        with self._lock:
-            rows, self._pending = self._pending, []
-        if rows:
-            try:
-                self._sqlite_insert(rows, wait=True)
-            except sqlite3.Error as exc:
-                log.warning("could not record %d media requests: %s", len(rows), exc)
+    def served(self, session_id: str, page_index: int, slot: int, first: int, last: int, total: int,
+               status: int, now) -> None:
+        """Record the byte range ``first..last`` (inclusive) of a ``total``-byte file sent with ``status``,
+        without waiting: queued for the background writer (written within ~50 ms, or by :meth:`flush`)."""
+        self._defer(INSERT_SERVED, (session_id, page_index, slot, first, last, total, status, now))
 
-    def _defer(self, row) -> None:
+    def flush(self) -> None:
+        """Write what is queued now, after what nginx logged (exports call this, so that they see this
+        process's records)."""
+        if self.access_log:
+            from study_app.media_nginx import ingest
+            ingest(self, self.access_log)
         with self._lock:
-            self._pending.append(row)
+            pending, self._pending = self._pending, []
+        for sql in dict.fromkeys(q for q, _row in pending):
+            rows = [row for q, row in pending if q == sql]
+            try:
+                self.write(sql, rows)
+            except (DBAPIError, sqlite3.Error) as exc:
+                log.warning("could not record %d media rows: %s", len(rows), exc)
+
+    def write(self, sql: str, rows: list) -> None:
+        """Write ``rows`` of ``sql`` (:data:`INSERT` or :data:`INSERT_SERVED`) now, waiting for the lock."""
+        if self.sqlite:
+            self._sqlite_insert(sql, rows, wait=True)
+        elif sql is INSERT_SERVED:
+            self.insert_served(rows)
+        else:
+            for s, p, k, t in rows:
+                self.record(s, p, k, t)
+
+    def insert_served(self, rows: list) -> None:
+        """Write ``media_served`` rows in one transaction (PostgreSQL: without waiting for the disk)."""
+        names = ("session_id", "page_index", "slot", "first_byte", "last_byte", "total", "status", "served_at")
+        with self.Session.begin() as db:
+            if self.engine.dialect.name == "postgresql":
+                db.execute(text("SET LOCAL synchronous_commit TO OFF"))
+            db.add_all([self.served_model(**dict(zip(names, row))) for row in rows])
+
+    def _defer(self, sql: str, row: tuple) -> None:
+        with self._lock:
+            self._pending.append((sql, row))
             if self._thread is None or not self._thread.is_alive():
                 self._thread = threading.Thread(target=self._run, name="evalsuite-media-log", daemon=True)
                 self._thread.start()
@@ -93,7 +133,7 @@ class MediaLog:
             else:
                 idle += 1
 
-    def _sqlite_insert(self, rows: list, wait: bool) -> bool:
+    def _sqlite_insert(self, sql: str, rows: list, wait: bool) -> bool:
         """Insert ``rows`` in one transaction; without ``wait``, give up at once (False) if another writer
         holds the lock."""
         raw = self.engine.raw_connection()
@@ -106,7 +146,7 @@ class MediaLog:
                 cur.execute("PRAGMA busy_timeout=0")
             try:
                 cur.execute("BEGIN IMMEDIATE")
-                cur.executemany(INSERT, [(s, p, k, t.strftime("%Y-%m-%d %H:%M:%S.%f")) for s, p, k, t in rows])
+                cur.executemany(sql, [(*r[:-1], r[-1].strftime("%Y-%m-%d %H:%M:%S.%f")) for r in rows])
                 cur.execute("COMMIT")
                 return True
             except sqlite3.OperationalError as exc:

@@ -3,17 +3,16 @@
 Every media response that carries a body is recorded (``media_served``: session, page, slot, the first and
 last byte of the range sent, the file's length, the HTTP status and the time). The coverage of a slot is the
 union of its ranges: a slot counts as fully served only when the union covers every byte of the file
-(:mod:`study_app.playback` then judges the page). The record is made where the response is authorised, so
-the same table can later be fed by a front server that sends the bytes itself (``X-Accel-Redirect``): the
-app's authorisation step writes the requested range, and the front server's access log or completion
-callback confirms the bytes sent (docs/study_app.md, "What counts as watched").
+(:mod:`study_app.playback` then judges the page). When the app sends the
+media itself the range is queued for the media log's writer (:mod:`study_app.media_log`); behind nginx
+(``X-Accel-Redirect``) nginx sends the bytes and its access log says which, read by
+:mod:`study_app.media_nginx` (docs/study_app.md, "What counts as watched"; docs/deploy.md).
 """
 from __future__ import annotations
 
 import logging
 
 from sqlalchemy import select
-from sqlalchemy.exc import DBAPIError
 
 from study_app.storage.tables import MediaServed, ParticipantSession, utcnow
 
@@ -33,17 +32,13 @@ def served_range(resp) -> tuple[int, int, int] | None:
 
 
 def record_served(store, session_id: str, page_index: int, slot: int, resp) -> None:
-    """Write the range a media response sends (nothing for HEAD, 304 or 416 answers)."""
+    """Record the range a media response sends (nothing for HEAD, 304 or 416 answers), through the media
+    log's queued writer (:meth:`study_app.media_log.MediaLog.served`): the response never waits for it."""
     rng = served_range(resp)
     if rng is None:
         return
     first, last, total = rng
-    try:
-        with store.Session.begin() as db:
-            db.add(MediaServed(session_id=session_id, page_index=page_index, slot=slot, first_byte=first,
-                               last_byte=last, total=total, status=resp.status_code, served_at=utcnow()))
-    except DBAPIError as exc:       # the media is served all the same; the page may then be flagged
-        log.warning("could not record the bytes served to session %s: %s", session_id, exc)
+    store.media_log.served(session_id, page_index, slot, first, last, total, resp.status_code, utcnow())
 
 
 def coverage(ranges: list[tuple[int, int]]) -> int:
@@ -76,6 +71,7 @@ def served_by_page(db, study_id: str) -> dict[tuple[str, int], dict[int, tuple[i
 
 def fully_served(store, session_id: str, page_index: int, slot: int) -> bool:
     """Whether every byte of this slot's file was already sent to the session (the "play once" rule)."""
+    store.media_log.flush()                # this process's queued records first
     with store.ReadSession() as db:
         rows = db.execute(select(MediaServed.first_byte, MediaServed.last_byte, MediaServed.total).where(
             MediaServed.session_id == session_id, MediaServed.page_index == page_index,
