@@ -8,9 +8,11 @@ skeleton.
 * ``rotmat`` (Gesture2Vec): the same rotations as flattened 3x3 matrices ``(T, 9J)``; decoding projects each
   onto the nearest rotation (scipy's ``Rotation.from_matrix``) first.
 * ``positions`` (Aud2Repr2Pose IVA'19, Ferstl et al.): world positions of the modelled joints relative to the
-  root joint, ``(T, 3J)``, in the corpus's units; decoded as a positions motion with the joints' names and
-  their nearest modelled ancestors as parents, put back at the template's root position (hip-centric, as
-  the paper's second study).
+  root joint, ``(T, 3J)``, in the corpus's units; decoded as a positions motion on the corpus's **whole**
+  skeleton (every joint of the template, root included, with its parents), so that it scores against the
+  corpus's natural motion with no joint filter: the modelled joints at their generated positions plus the
+  template's root position (hip-centric, as the paper's second study), the root at the template's, and every
+  other joint carried rigidly by its nearest modelled ancestor (the template's offset from that ancestor).
 
 The representation resamples to its own frame rate (20 fps, as all four papers) on the way in. A model folder
 keeps it as ``representation.json`` plus ``template.bvh`` (one frame).
@@ -97,15 +99,7 @@ class PoseRepresentation:
             raise InputError(f"poses of shape {x.shape} do not fit this representation ({self.dim} values per frame)")
         t = self.template
         if self.kind == "positions":
-            names = self.joints
-            parents = []
-            for j in names:
-                p = t.skeleton.parents[t.joint_index(j)]
-                while p >= 0 and t.joint_names[p] not in names:
-                    p = t.skeleton.parents[p]
-                parents.append(names.index(t.joint_names[p]) if p >= 0 else -1)
-            root = t.positions()[0, t.skeleton.roots[0]]
-            return Motion.from_positions(x.reshape(len(x), -1, 3) + root, names, self.fps, parents)
+            return self._decode_positions(x)
         if self.kind == "rotmat":
             from scipy.spatial.transform import Rotation
 
@@ -119,6 +113,25 @@ class PoseRepresentation:
         for k, j in enumerate(self.joints):
             rv[:, order.index(j)] = x[:, 3 * k:3 * k + 3]
         return with_rotation_vectors(full, rv)
+
+    def _decode_positions(self, x: np.ndarray) -> Motion:
+        """``(T, 3J)`` root-relative positions -> a positions motion of every joint of the template."""
+        t = self.template
+        rest = t.positions()[0]                                  # (J_all, 3)
+        root = int(t.skeleton.roots[0])
+        parents = [int(p) for p in t.skeleton.parents]
+        out = np.empty((len(x), len(t.joint_names), 3))
+        modelled = {t.joint_index(j): k for k, j in enumerate(self.joints)}
+        gen = x.reshape(len(x), -1, 3) + rest[root]
+        for j in range(len(t.joint_names)):                      # parents come before their children
+            if j in modelled:
+                out[:, j] = gen[:, modelled[j]]
+                continue
+            a = parents[j]
+            while a >= 0 and a not in modelled and a != root:
+                a = parents[a]
+            out[:, j] = rest[j] if a < 0 or a == root and root not in modelled else out[:, a] + (rest[j] - rest[a])
+        return Motion.from_positions(out, list(t.joint_names), self.fps, parents)
 
     # -- files ---------------------------------------------------------------------------------------------
     def save(self, folder: pathlib.Path) -> None:
