@@ -22,6 +22,7 @@ from flask import (
     url_for,
 )
 
+from study_app.adaptive import adaptive_status
 from study_app.context import get_store, get_study
 from study_app.errors import StudyStateError
 from study_app.export import raw_json_chunks, result_rows, results_csv
@@ -101,7 +102,8 @@ def overview():
                            n_answers=len(dump["answers"]), now=now,
                            participants=participant_rows(store, study, now),
                            reports=unplayable_reports(store, study), refresh_seconds=_refresh_seconds(),
-                           pilot=pilot_mode(store, study), messages=get_flashed_messages(with_categories=True))
+                           pilot=pilot_mode(store, study), messages=get_flashed_messages(with_categories=True),
+                           adaptive=adaptive_status(store, study))
 
 
 def _refresh_seconds() -> int:
@@ -122,7 +124,8 @@ def status_json():
                    sessions={"started": sum(statuses.values()), **{k: statuses.get(k, 0) for k in
                                                                     ("active", "finished", "failed", "expired")}},
                    answers=answer_count(store, study), plans=plan_counts(store, study, now),
-                   participants=participant_rows(store, study, now), reports=unplayable_reports(store, study))
+                   participants=participant_rows(store, study, now), reports=unplayable_reports(store, study),
+                   adaptive=adaptive_status(store, study))
 
 
 def _export_dump():

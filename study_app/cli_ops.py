@@ -1,4 +1,4 @@
-"""``evalsuite study release|topup|exclude|pilot|forget|review-export|prolific-review``: the operations on a
+"""``evalsuite study release|topup|exclude|pilot|forget|review-export|prolific-review|status``: the operations on a
 running study (:mod:`study_app.operations`), from the command line, on the study's database."""
 from __future__ import annotations
 
@@ -147,4 +147,23 @@ def prolific_review(study_file, db, instance, token, base_url, apply_):
             raise click.ClickException(str(exc)) from None
 
 
-COMMANDS = [release, topup, exclude, pilot, forget, review_export, prolific_review]
+@click.command()
+@_db_options
+def status(study_file, db, instance):
+    """Sessions by status and, for each adaptive pairwise block, its votes, estimated order and whether the
+    ranking has separated (the study may stop; study_app.adaptive)."""
+    from study_app.adaptive import adaptive_status
+    from study_app.monitor import answer_count, status_counts
+    st, store = _study_store(study_file, instance, db)
+    counts = status_counts(store, st)
+    click.echo(f"sessions: {sum(counts.values())} started, " + ", ".join(
+        f"{counts.get(k, 0)} {k}" for k in ("active", "finished", "failed", "expired")) +
+        f"; {answer_count(store, st)} answers")
+    for a in adaptive_status(store, st):
+        order = " > ".join(f"{c} ({e})" for c, e in zip(a["order"], a["elo"]))
+        verdict = ("ranking separated: the study may stop" if a["done"] else
+                   f"{a['separated']} of {a['neighbours']} neighbouring pairs separated: not separated yet")
+        click.echo(f"{a['block']}: {a['votes']} votes; {order}; {verdict}")
+
+
+COMMANDS = [release, topup, exclude, pilot, forget, review_export, prolific_review, status]

@@ -15,6 +15,7 @@ from functools import partial
 
 from flask import Blueprint, abort, current_app, jsonify, redirect, render_template, request, session, url_for
 
+from study_app.adaptive import assign_pair
 from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
 from study_app.operations import decline_without_plan, mark_if_pilot
@@ -181,7 +182,7 @@ def page(sid):
     if sess.plan_id is None and not store.has_free_plan(study.id):
         return _full()
     index = sess.current_page
-    spec = pages[index]
+    spec = assign_pair(store, study, sid, index, pages[index])     # an adaptive pairwise page: its pair now
     data = _page_data(study, spec, index, len(pages), sid)
     data.update(draft=view.draft or {}, played=sorted(s for s in played["play"] if s is not None),
                 ended=sorted(s for s in played["ended"] if s is not None))
