@@ -45,6 +45,12 @@ CASES = {
     "gesticulator": (["epochs=6", "words=\"hash\"", "ema=0.9", "patience=4"], 3, "after"),
     "aud2repr2pose": (["epochs=5", "dae_epochs=3", "patience=3"], 5, "during"),   # killed in the speech stage
     "aud2pose": (["epochs=5", "form=\"windowed\"", "width=16"], 2, "after"),
+    # killed in the decoder-only VQ-DVAE epochs
+    "gesture2vec": (["words=\"hash\"", "codebook=8", "dae_epochs=2", "vq_epochs=2", "vq_decoder_epochs=2",
+                     "translation_epochs=3"], 5, "after"),
+    # killed in the adversarial steps (the discriminators' pre-training is re-run on resume)
+    "ferstl-mogan": (["classifier_epochs=2", "pretrain_epochs=2", "adversarial_steps=6", "batch_size=4",
+                      "realism_pretrain_steps=2", "phase_pretrain_tries=2"], 7, "during"),
 }
 
 

@@ -29,6 +29,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from evalsuite.generators import checkpoints
 from evalsuite.generators.ferstl_mogan.net import (
     Generator,
     MinibatchDiscriminator,
@@ -155,7 +156,10 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     # (1) phase classifier on real motion
     clf = PhaseClassifier(config)
     opt = torch.optim.Adam(clf.parameters(), lr=stages.learning_rate)
-    for epoch in range(stages.classifier_epochs):
+    ck = checkpoints.current()  # resumable: everything each stage's next epoch (step) depends on
+    state: dict = {"classifier": clf, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
+    first, done = ck.start("phase classifier", state)
+    for epoch in range(first, first if done else stages.classifier_epochs):
         clf.train()
         for idx in torch.from_numpy(rng.permutation(n)).split(stages.batch_size):
             logits = clf(_classifier_input(Y[idx], X[idx, :, -1], arm))
@@ -164,7 +168,9 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
             loss.backward()
             opt.step()
         log({"stage": "phase classifier", "epoch": epoch + 1, "train_loss": loss.item()})
-        if late(0, "phase classifier"):
+        cut = late(0, "phase classifier")
+        ck.step("phase classifier", epoch + 1, state, done=cut or epoch + 1 == stages.classifier_epochs)
+        if cut:
             break
     clf.eval()
     for p in clf.parameters():
@@ -200,7 +206,10 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     opt = torch.optim.Adam(gen.parameters(), lr=stages.learning_rate)
     snapshots = [copy.deepcopy(gen.state_dict())]
     every = max(1, stages.pretrain_epochs // stages.snapshots)
-    for epoch in range(stages.pretrain_epochs):
+    state = {"generator": gen, "opt": opt, "rng": rng, "history": history, "stopped": stopped,
+             "snapshots": snapshots}
+    first, done = ck.start("generator MSE pre-training", state)
+    for epoch in range(first, first if done else stages.pretrain_epochs):
         gen.train()
         for idx in torch.from_numpy(rng.permutation(n)).split(stages.batch_size):
             loss = nn.functional.mse_loss(gen(X[idx], noise(len(idx), config.sequence)), Y[idx])
@@ -211,6 +220,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
         if (epoch + 1) % every == 0 or cut:
             snapshots.append(copy.deepcopy(gen.state_dict()))
         log({"stage": "generator MSE pre-training", "epoch": epoch + 1, "train_loss": loss.item(), **val_mse(gen)})
+        ck.step("generator MSE pre-training", epoch + 1, state, done=cut or epoch + 1 == stages.pretrain_epochs)
         if cut:
             break
     if "mse_only" in stages.discriminators or not stages.discriminators:
@@ -289,7 +299,10 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     g_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
     mse_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
     total_w = sum(WEIGHTS[k] for k in active)
-    for step in range(stages.adversarial_steps):
+    state = {"generator": gen, "g_opt": g_opt, "mse_opt": mse_opt, "rng": rng, "history": history, "stopped": stopped,
+             **{f"d_{k}": discs[k] for k in active}, **{f"d_{k}_opt": d_opts[k] for k in active}}
+    first, done = ck.start("adversarial", state)  # the discriminators' pre-training is re-run, then overwritten
+    for step in range(first, first if done else stages.adversarial_steps):
         if late(3, "adversarial"):
             break
         gen.train()
@@ -314,6 +327,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
         if step % 50 == 0 or step == stages.adversarial_steps - 1:
             log({"stage": "adversarial", "step": step + 1, "generator_loss": g_loss.item(),
                  **{f"d_{k}_accuracy": v for k, v in accs.items()}})
+        ck.step("adversarial", step + 1, state, done=step + 1 == stages.adversarial_steps)
     gen.eval()
     return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history, stopped)
 

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from evalsuite.generators import checkpoints
 from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
 from evalsuite.generators.scaling import floored_spread
 
@@ -177,7 +178,10 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     x = torch.from_numpy(np.concatenate(norm))
     vx = torch.from_numpy(np.concatenate(vnorm)) if vnorm else None
     opt = torch.optim.Adam(dae.parameters(), lr=stages.learning_rate)
-    for epoch in range(stages.dae_epochs):
+    ck = checkpoints.current()  # resumable: everything each stage's next epoch depends on
+    state: dict = {"dae": dae, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
+    first, done = ck.start("frame autoencoder", state)
+    for epoch in range(first, first if done else stages.dae_epochs):
         dae.train()
         total = 0.0
         for idx in _batches(len(x), stages.batch_size, rng):
@@ -193,6 +197,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
                 rec["val_loss"] = nn.functional.mse_loss(dae(vx), vx).item()
         stop = out_of_time(0, rec, "frame autoencoder")
         log(rec)
+        ck.step("frame autoencoder", epoch + 1, state, done=stop or epoch + 1 == stages.dae_epochs)
         if stop:
             break
     dae.eval()
@@ -215,16 +220,20 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     for p in frozen:  # weakened decoder: no gradient reaches it, the encoder carries the reconstruction
         p.requires_grad_(False)
     opt = torch.optim.Adam([p for p in vq.parameters() if p.requires_grad], lr=stages.learning_rate)
+    decoder_opt = torch.optim.Adam([*vq.decoder.parameters(), *vq.out.parameters()], lr=stages.learning_rate)
     total_vq = stages.vq_epochs + stages.vq_decoder_epochs
-    epoch = 0
-    while epoch < total_vq:
+    state = {"vq": vq, "opt": opt, "decoder_opt": decoder_opt, "rng": rng, "history": history, "stopped": stopped}
+    epoch, done = ck.start("vq-dvae", state)
+    switched = False
+    while not done and epoch < total_vq:
         decoder_only = epoch >= stages.vq_epochs
-        if decoder_only and epoch == stages.vq_epochs:
+        if decoder_only and not switched:  # the decoder alone from here on (also when resumed here)
+            switched = True
             for p in [*vq.encoder.parameters(), *vq.codebook.parameters()]:
                 p.requires_grad_(False)
             for p in frozen:
                 p.requires_grad_(True)
-            opt = torch.optim.Adam([*vq.decoder.parameters(), *vq.out.parameters()], lr=stages.learning_rate)
+            opt = decoder_opt
         vq.train()
         total, counts = 0.0, np.zeros(config.codebook)
         for idx in _batches(len(ct), stages.batch_size, rng):
@@ -254,6 +263,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             epoch = stages.vq_epochs - 1 if not decoder_only and stages.vq_decoder_epochs else total_vq
         log(rec)
         epoch += 1
+        ck.step("vq-dvae", epoch, state, done=epoch >= total_vq)
     vq.eval()
     # 3. translation: word windows (one every `stride` frames) -> codes of each window's non-overlapping chunks
     train_chunks: dict[int, list[np.ndarray]] = {}
@@ -267,7 +277,9 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     targets = torch.from_numpy(np.stack(tgts).astype(np.int64))
     al_t = torch.from_numpy(np.stack(al))
     ce = nn.functional.cross_entropy
-    for epoch in range(stages.translation_epochs):
+    state = {"translator": translator, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
+    first, done = ck.start("translation", state)
+    for epoch in range(first, first if done else stages.translation_epochs):
         translator.train()
         total = 0.0
         for idx in _batches(len(srcs), stages.batch_size, rng):
@@ -289,6 +301,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
                 rec["val_code_error"] = float((logits.argmax(-1) != vt).float().mean())
         stop = out_of_time(2, rec, "translation")
         log(rec)
+        ck.step("translation", epoch + 1, state, done=stop or epoch + 1 == stages.translation_epochs)
         if stop:
             break
     translator.eval()
