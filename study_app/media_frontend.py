@@ -1,7 +1,8 @@
 """Throwaway nginx + gunicorn in front of a study, on loopback ports in a temporary folder, for the tests
 and ``benchmarks/study_load.py`` (needs a source checkout: the nginx site file is ``deploy/nginx/``).
 
-:class:`Gunicorn` runs ``study_app.app:create_app_from_env()`` under gunicorn (gthread workers) in its own
+:class:`Gunicorn` runs gunicorn with the shipped settings (``deploy/gunicorn.conf.py``: the app
+``study_app.app:create_app_from_env()``, gthread workers; workers, threads and address given here) in its own
 process group, so :meth:`Gunicorn.kill` can SIGKILL master and workers at once. :class:`Nginx` runs Debian's
 nginx binary as its own master with a minimal main configuration that includes the shipped site file
 (``deploy/nginx/evalsuite.conf.template``) filled in by :func:`render_site` exactly as ``envsubst`` would.
@@ -20,9 +21,11 @@ import time
 import urllib.error
 import urllib.request
 
-__all__ = ["SITE_TEMPLATE", "SITE_NAMES", "free_port", "render_site", "nginx_binary", "Nginx", "Gunicorn"]
+__all__ = ["SITE_TEMPLATE", "GUNICORN_CONF", "SITE_NAMES", "free_port", "render_site", "nginx_binary", "Nginx", "Gunicorn"]
 
-SITE_TEMPLATE = pathlib.Path(__file__).resolve().parents[1] / "deploy" / "nginx" / "evalsuite.conf.template"
+DEPLOY = pathlib.Path(__file__).resolve().parents[1] / "deploy"
+SITE_TEMPLATE = DEPLOY / "nginx" / "evalsuite.conf.template"
+GUNICORN_CONF = DEPLOY / "gunicorn.conf.py"
 SITE_NAMES = ("NGINX_LISTEN", "NGINX_SERVER_NAME", "EVALSUITE_APP", "EVALSUITE_STIMULI", "EVALSUITE_MEDIA_ACCESS_LOG")
 
 
@@ -68,9 +71,8 @@ class Gunicorn:
         root = str(pathlib.Path(__file__).resolve().parents[1])
         self.env = dict(os.environ, EVALSUITE_INSECURE_COOKIES="1", **env)
         self.env["PYTHONPATH"] = os.pathsep.join(p for p in (root, self.env.get("PYTHONPATH", "")) if p)
-        self.args = [sys.executable, "-m", "gunicorn", "-w", str(workers), "--threads", str(threads),
-                     "-k", "gthread", "-b", f"127.0.0.1:{self.port}", "--timeout", "60",
-                     "--log-level", "warning", "study_app.app:create_app_from_env()"]
+        self.args = [sys.executable, "-m", "gunicorn", "-c", str(GUNICORN_CONF), "-w", str(workers),
+                     "--threads", str(threads), "-b", f"127.0.0.1:{self.port}", "--log-level", "warning"]
         self.proc: subprocess.Popen | None = None
 
     @property

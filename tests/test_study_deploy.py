@@ -17,6 +17,7 @@ from deploy_helpers import ADMIN, SECRET, WebParticipant, admin_get, app_env, ma
 
 from study_app.app import create_app
 from study_app.media_frontend import Gunicorn, Nginx
+from study_app.media_nginx import parse_line
 from study_app.storage import Store, make_engine
 from study_app.testing import create_database, postgres_bindir, throwaway_postgres
 
@@ -80,7 +81,7 @@ def test_nginx_serves_the_study_and_records_the_bytes_each_client_received(tmp_p
             p.answer(data, csrf, {"choices": {"human_likeness": "right"}, "reasons": []})
         assert "DEPLOYDONE" in html
         # nginx sent every video (one log line per response with a body), not the app
-        assert len(log.read_text().splitlines()) == 3 + sum(len(r) for k, r in received.items() if k[0] != first_page)
+        assert sum(parse_line(x) is not None for x in log.read_text().splitlines()) == 4 + sum(len(r) for k, r in received.items() if k[0] != first_page)
         raw = admin_get(nginx.url, "/admin/export/raw.json").json()
         served = _served(db)
         for (index, slot), ranges in received.items():
@@ -219,3 +220,24 @@ def _export(app, name: str):
 
 def _dsn(url: str) -> str:
     return url.replace("postgresql+psycopg://", "postgresql://")
+
+
+def test_container_files_use_the_tested_nginx_site_and_gunicorn_settings():
+    """docker-compose.yml and the Dockerfile cannot run here (no docker): they must at least reuse the files
+    the tests above run, and give nginx every name the site file needs."""
+    import yaml
+
+    from study_app.media_frontend import GUNICORN_CONF, SITE_NAMES, SITE_TEMPLATE
+    root = SITE_TEMPLATE.parents[2]
+    compose = yaml.safe_load((root / "docker-compose.yml").read_text())["services"]
+    nginx = compose["nginx"]
+    assert "./deploy/nginx/evalsuite.conf.template:/etc/nginx/templates/evalsuite.conf.template:ro" in nginx["volumes"]
+    assert set(SITE_NAMES) <= set(nginx["environment"])
+    assert "${" + "NGINX_LISTEN}" in SITE_TEMPLATE.read_text()
+    log = nginx["environment"]["EVALSUITE_MEDIA_ACCESS_LOG"]
+    dockerfile = (root / "Dockerfile").read_text()
+    assert f"EVALSUITE_MEDIA_ACCESS_LOG={log}" in dockerfile and "EVALSUITE_MEDIA_SERVER=nginx" in dockerfile
+    assert f'"-c", "/opt/evalsuite/src/deploy/{GUNICORN_CONF.name}"' in dockerfile
+    assert nginx["environment"]["EVALSUITE_APP"] == "app:8000" and "EVALSUITE_BIND=0.0.0.0:8000" in dockerfile
+    unit = (root / "deploy" / "systemd" / "evalsuite-study.service").read_text()
+    assert f"-c /opt/evalsuite/src/deploy/{GUNICORN_CONF.name}" in unit
