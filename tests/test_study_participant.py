@@ -205,4 +205,8 @@ def test_answer_responses_are_exactly_the_documented_json(study_dir, sqlite_url)
         200, b'{"next":"%s","session_status":"active","status":"duplicate"}\n' % nxt.encode())
     other = p.post(data["answer_url"], {**body, "token": "tok-bytes-02"}, csrf)
     assert (other.status_code, other.data) == (
-        409, b'{"error":"this page was already answered; the stored answer is kept","next":"%s"}\n' % nxt.encode())
+        409, b'{"current_page":1,"error":"this page was already answered in another tab or window; the answer '
+        b'given there is kept","next":"%s","session_status":"active","stale":true}\n' % nxt.encode())
+    late_draft = p.post(data["draft_url"], {"draft": {"fields": {}}}, csrf)     # a stale tab's autosave
+    assert (late_draft.status_code, late_draft.get_json()) == (
+        409, {"error": "not the current page", "stale": True, "next": nxt})
