@@ -23,7 +23,7 @@ def ffmpeg() -> str:
 
 def make_av_stimuli(folder, conditions, segments, *, seconds=1.0, attention=()) -> pathlib.Path:
     """Clips with sound for every condition x segment (segment ``i``'s speech: a tone of ``tone_hz(i)`` as long
-    as its video, ``seconds`` or ``seconds[i]``), plus silent attention clips ``(segment, expected)``; returns
+    as its video, ``seconds`` or ``seconds[i]``), plus silent attention clips ``(segment, expected[, check])``; returns
     the manifest path."""
     from study_app.samples import blinded_name, write_clip
 
@@ -44,15 +44,16 @@ def make_av_stimuli(folder, conditions, segments, *, seconds=1.0, attention=()) 
                             "-c:a", "aac", "-b:a", "64k", "-shortest", str(folder / name)], check=True)
             video.unlink()
             rows.append({"file": name, "condition": c, "segment": seg})
-    for k, (seg, expected) in enumerate(attention):
+    for k, (seg, expected, *check) in enumerate(attention):
         name = blinded_name("av-attention", seg, expected, k)
         write_clip(folder / name, 1000 + k, 1.0, 10, text=f"Attention! {expected}")
-        rows.append({"file": name, "condition": "", "segment": seg, "kind": "attention", "expected": expected})
+        rows.append({"file": name, "condition": "", "segment": seg, "kind": "attention", "expected": expected,
+                     "check": check[0] if check else "instruction"})
     for i in range(len(segments)):
         (folder / f"tone{i}.wav").unlink()
     path = folder / "manifest.csv"
     with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=["file", "condition", "segment", "kind", "expected"])
+        w = csv.DictWriter(fh, fieldnames=["file", "condition", "segment", "kind", "expected", "check"])
         w.writeheader()
         for r in rows:
             w.writerow({k: r.get(k, "") for k in w.fieldnames})

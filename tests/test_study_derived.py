@@ -163,6 +163,35 @@ def test_a_donor_without_sound_is_an_error_naming_its_line(tmp_path):
         derived.write_derived(study.manifest, progress=False)
 
 
+def test_an_audio_attention_check_in_a_muted_pair_block_is_refused(tmp_path):
+    make_av_stimuli(tmp_path / "stim", CONDITIONS, SEGMENTS, attention=[("s1", "this", "distorted_audio")])
+    path = tmp_path / "study.yaml"
+    path.write_text(STUDY.format(sessions=2, speakers=SPEAKERS).replace("    pages: 2\n", "    pages: 2\n"
+                                                                         "    attention_checks: [1]\n"))
+    with pytest.raises(StudyDefinitionError, match=r"pages\[1\].attention_checks: .* needs sound, but block "
+                                                   r"'realism' is muted"):
+        load_study(path)
+    path.write_text(path.read_text().replace("    muted: true\n", ""))
+    assert load_study(path).page("realism").cfg["attention_checks"] == [1]
+
+
+def test_practice_of_an_audio_mismatch_block_uses_its_segments(tmp_path, stim):
+    path = _study(tmp_path, stim)
+    text = path.read_text()
+
+    def with_practice(practice_segment, block_segments):
+        path.write_text(text.replace("  - type: pairwise\n    id: align\n",
+                                     f"  - {{type: training, id: practice, of: align, segments: [{practice_segment}]}}\n"
+                                     f"  - type: pairwise\n    id: align\n    segments: [{block_segments}]\n", 1))
+        return load_study(path)
+
+    study = with_practice("s1", "s1, s2, s3, s4")
+    practice = [p for plan in build_plans(study)["plans"] for p in plan["pages"] if p.get("training")]
+    assert practice and all(study.manifest.by_file()[p["b"]].audio_mismatched for p in practice)
+    with pytest.raises(StudyDefinitionError, match=r"pages\[0\].segments\[0\]: segment 's1' is not one of 'align'"):
+        with_practice("s1", "s3, s4")
+
+
 def test_derangement_moves_every_element():
     import random
 

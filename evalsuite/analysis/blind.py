@@ -12,8 +12,9 @@ so tables, figures, the HTML report and console messages only ever show codes.
   (not even their alphabetical order).
 - ``--reveal`` analyses with the real names, writes ``blind_key.csv`` (code -> condition)
   so earlier blinded outputs can be read, and removes the marker.
-- A mismatched stimulus ``X:mismatched`` is coded as ``<code of X>:mismatched`` so the
-  matched/mismatched analysis still pairs them.
+- A mismatched stimulus ``X:mismatched`` is coded as ``<code of X>:mismatched`` (and an
+  audio-mismatched one ``X:audio_mismatched`` as ``<code of X>:audio_mismatched``) so the
+  matched/mismatched analyses still pair them.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ import secrets
 import numpy as np
 import pandas as pd
 
+from evalsuite.analysis.pairwise import AUDIO_MISMATCH_SUFFIX
 from evalsuite.errors import InputError
 
 MARKER = ".evalsuite-blind"
@@ -43,16 +45,22 @@ def all_conditions(df: pd.DataFrame):
 
 def blind_codes(conditions, salt: str, mismatch_suffix: str = ":mismatched") -> dict:
     """``{name: code}`` for ``conditions``: a salt-seeded permutation of the base names
-    numbered ``B01, B02, ...``; ``X + mismatch_suffix`` maps to ``code(X) + mismatch_suffix``."""
+    numbered ``B01, B02, ...``; ``X + mismatch_suffix`` maps to ``code(X) + mismatch_suffix``, and
+    ``X:audio_mismatched`` to ``code(X):audio_mismatched``."""
     names = set(conditions)
-    base = sorted(n for n in names if not (mismatch_suffix and n.endswith(mismatch_suffix)
-                                           and n[: -len(mismatch_suffix)] in names))
+    suffixes = [s for s in (mismatch_suffix, AUDIO_MISMATCH_SUFFIX) if s]
+
+    def parent(n: str) -> tuple[str, str] | None:
+        return next(((n[: -len(s)], s) for s in suffixes if n.endswith(s) and n[: -len(s)] in names), None)
+
+    base = sorted(n for n in names if parent(n) is None)
     seed = int.from_bytes(hashlib.sha256(salt.encode()).digest()[:8], "little")
     perm = np.random.default_rng(seed).permutation(len(base))
     width = max(2, len(str(len(base))))
     codes = {base[i]: f"B{k + 1:0{width}d}" for k, i in enumerate(perm)}
     for n in names - set(base):
-        codes[n] = codes[n[: -len(mismatch_suffix)]] + mismatch_suffix
+        x, s = parent(n) or (n, "")
+        codes[n] = codes[x] + s
     return codes
 
 

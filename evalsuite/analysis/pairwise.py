@@ -224,13 +224,17 @@ def mismatch_pairs(conditions, suffix: str = ":mismatched"):
     return {c: c + suffix for c in sorted(conds) if not c.endswith(suffix) and c + suffix in conds}
 
 
+AUDIO_MISMATCH_SUFFIX = ":audio_mismatched"   # the study app's audio-mismatched clips (same motion, other speech)
+
+
 def is_mismatch(a: pd.Series, b: pd.Series, suffix: str = ":mismatched") -> pd.Series:
-    """True where a comparison of ``a`` with ``b`` (condition names, aligned Series) is ``X`` vs ``X + suffix``:
-    matched vs mismatched, not a comparison between two systems (left out of rankings and win rates). All
-    False for an empty ``suffix``."""
+    """True where a comparison of ``a`` with ``b`` (condition names, aligned Series) is ``X`` vs ``X + suffix``
+    or ``X`` vs ``X`` + :data:`AUDIO_MISMATCH_SUFFIX`: matched vs mismatched, not a comparison between two
+    systems (left out of rankings and win rates). An empty ``suffix`` leaves only the audio-mismatched ones."""
+    out = (b == a + AUDIO_MISMATCH_SUFFIX) | (a == b + AUDIO_MISMATCH_SUFFIX)
     if not suffix:
-        return pd.Series(False, index=a.index)
-    return (b == a + suffix) | (a == b + suffix)
+        return out
+    return out | (b == a + suffix) | (a == b + suffix)
 
 
 BARNARD_EXACT_MAX_CELLS = 250_000

@@ -12,10 +12,11 @@ import pandas as pd
 
 from evalsuite.analysis import blind as blinding
 from evalsuite.analysis import report
+from evalsuite.analysis.audio_mismatch import audio_mismatch_tables
 from evalsuite.analysis.exclusions import apply_exclusions
 from evalsuite.analysis.io import read_any
 from evalsuite.analysis.likert import likert_tables
-from evalsuite.analysis.pairwise import mismatch_tables, orient, pairwise_table
+from evalsuite.analysis.pairwise import is_mismatch, mismatch_tables, orient, pairwise_table
 from evalsuite.analysis.ranking import elo_table
 from evalsuite.analysis.ratings import rating_summary, significance_matrix, wilcoxon_pairs
 from evalsuite.analysis.sections import collapse_notes, display_order, settings_rows
@@ -124,10 +125,15 @@ def analyze(path, out_dir, options: AnalysisOptions | None = None, *, blind: boo
         if not between.empty:
             T["mismatch_barnard"] = between
             items += _notes(between, "Barnard", ["question", "condition_1", "condition_2"], "mismatch_barnard")
-        # A ranking needs comparisons between systems; matched-vs-mismatched pairs are not.
-        mism = pw["condition_b"] == pw["condition_a"] + opt.mismatch_suffix
-        mism |= pw["condition_a"] == pw["condition_b"] + opt.mismatch_suffix
-        ranked = pw[~mism] if opt.mismatch_suffix else pw
+        audio, audio_between = audio_mismatch_tables(T["pairwise"], tie_policy=opt.mismatch_tie_policy,
+                                                     alpha=opt.alpha)
+        if not audio.empty:   # the Leaderboard's audio mismatching: per system vs 50 %, ranked
+            T["audio_mismatch"] = audio
+            items += _notes(audio, "audio mismatch", ["question", "condition"], "audio_mismatch")
+        if not audio_between.empty:
+            T["audio_mismatch_barnard"] = audio_between
+        # A ranking needs comparisons between systems; matched-vs-mismatched pairs (motion or audio) are not.
+        ranked = pw[~is_mismatch(pw["condition_a"], pw["condition_b"], opt.mismatch_suffix)]
         if not ranked.empty:
             T["elo"] = elo_table(ranked, n_boot=opt.n_boot, seed=opt.seed, alpha=opt.alpha,
                                  prior=opt.elo_prior, sampler=opt.bootstrap_sampler)
@@ -253,6 +259,18 @@ def _figures_and_sections(res, opt, data, out_dir, raw, path):
                                                     ref=0.5, xlim=(0, 1)),
                                  f"mismatch_{_safe(q)}", f"Matched vs mismatched: {q}"))
         sections.append(("Matched vs mismatched", parts))
+    if "audio_mismatch" in T:
+        parts = [tbl(T["audio_mismatch"])]
+        if "audio_mismatch_barnard" in T:
+            parts += ["<p>Barnard's exact test between systems (Holm-corrected):</p>", tbl(T["audio_mismatch_barnard"])]
+        if opt.figures:
+            for q, sub in T["audio_mismatch"].groupby("question"):
+                parts.append(add(report.fig_bars_ci(sub, "condition", "pref_matched", f"Own speech preferred: {q}",
+                                                    f"share preferring the video with its own speech (ties "
+                                                    f"{opt.mismatch_tie_policy}, Clopper-Pearson 95% CI)",
+                                                    ref=0.5, xlim=(0, 1)),
+                                 f"audio_mismatch_{_safe(q)}", f"Audio mismatch: {q}"))
+        sections.append(("Audio mismatch (speech-gesture alignment)", parts))
     if "elo" in T:
         parts = [tbl(T["elo"])]
         if opt.figures:

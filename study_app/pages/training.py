@@ -28,6 +28,9 @@ class TrainingKind(PageKind):
         have = {(st.condition, st.segment, st.mismatched) for st in stimuli}
         needed = kind.shown_conditions(target.cfg)
         for j, s in enumerate(page.cfg["segments"] or []):
+            if target.cfg.get("audio_mismatch") and s not in target.cfg["segments"]:
+                chk.fail(f"pages[{index}].segments[{j}]", f"segment {s!r} is not one of {target.id!r}'s segments; "
+                         "practice of an audio_mismatch block uses its segments (their speakers are known)")
             # Practice may use segments the block itself does not rate, as long as they have its stimuli.
             ok = all((c, s, False) in have for c in needed)
             if kind.needs_mismatched(target.cfg):
