@@ -19,7 +19,7 @@ import numpy as np
 from evalsuite.errors import InputError
 
 VIEWS = {"front": 0.0, "three-quarter": 45.0, "side": 90.0}
-FRAMINGS = ("full", "upper")
+FRAMINGS = ("full", "above-knees", "upper")
 UP_AXES = {"y": np.array([0.0, 1.0, 0.0]), "z": np.array([0.0, 0.0, 1.0])}
 # Facing direction assumed when the skeleton has no left/right joints to tell.
 DEFAULT_FORWARD = {"y": np.array([0.0, 0.0, 1.0]), "z": np.array([0.0, -1.0, 0.0])}
@@ -118,13 +118,15 @@ def view_direction(forward, up_axis: str, view: str, elevation_deg: float) -> np
 
 
 def frame_points(points, direction, up_axis: str, width: int, height: int, *, yfov_deg: float = 30.0,
-                 margin: float = 0.06, pad: float = 0.0) -> Camera:
+                 margin: float = 0.06, pad: float = 0.0, aim=None) -> Camera:
     """The camera along ``direction`` that fits every point (plus ``pad``) in the picture.
 
     The points' projected extent is centred and leaves ``margin`` (a fraction of the
     half-width/height) free on its tightest side. Fitting is exact for the perspective
     projection: the distance is the smallest at which every point is inside the shrunken
-    frustum; centring is refined by a few fixed-point steps.
+    frustum; centring is refined by a few fixed-point steps. With ``aim`` (a world point, e.g.
+    the mean root position) the picture's vertical centre line passes through ``aim`` instead,
+    and the extent is fitted symmetrically about it.
     """
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     pts = pts[np.all(np.isfinite(pts), axis=1)]
@@ -140,6 +142,8 @@ def frame_points(points, direction, up_axis: str, width: int, height: int, *, yf
     tx = ty * width / height
     sx, sy = tx * (1.0 - margin), ty * (1.0 - margin)
     centre = (local.min(axis=0) + local.max(axis=0)) / 2.0
+    if aim is not None:
+        centre[0] = float(np.asarray(aim, dtype=np.float64) @ xc)
     extent = float(np.max(local.max(axis=0) - local.min(axis=0))) + 2 * pad
     dist = 1.0
     for _ in range(6):
@@ -150,6 +154,8 @@ def frame_points(points, direction, up_axis: str, width: int, height: int, *, yf
         nx, ny = rel[:, 0] / (depth * tx), rel[:, 1] / (depth * ty)
         # Shift the aim so the projected extent is symmetric about the image centre.
         mid_x, mid_y = (nx.min() + nx.max()) / 2.0, (ny.min() + ny.max()) / 2.0
+        if aim is not None:
+            mid_x = 0.0   # the aim stays on the centre line
         if abs(mid_x) < 1e-4 and abs(mid_y) < 1e-4:
             break
         centre = centre + np.array([mid_x * tx * dist, mid_y * ty * dist, 0.0])

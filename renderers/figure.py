@@ -110,11 +110,13 @@ class FigureStyle:
     centre_color: tuple = (0.32, 0.32, 0.35)   # dark grey
     head_color: tuple = (0.45, 0.45, 0.50)
     background: tuple = (1.0, 1.0, 1.0)
-    floor: bool = False
+    floor: bool | None = None                   # None: the body style's default (the mannequin stands on one)
     shadow: bool = False                        # cast the key light's shadow (on the floor); slower
     floor_color: tuple = (0.80, 0.80, 0.78)
     sphere_subdivisions: int = 1                # joint sphere tessellation (icosphere subdivisions)
     cylinder_sections: int = 10
+    body_color: tuple = (0.62, 0.63, 0.66)      # the mannequin's one body colour (neutral grey)
+    visor_color: tuple = (0.16, 0.17, 0.20)     # the mannequin's visor (face visible)
 
     def to_dict(self) -> dict:
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}

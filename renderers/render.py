@@ -93,7 +93,11 @@ def view_for(motions, settings: RenderSettings) -> View:
 def _meshes(motions, settings, view):
     """One mesh per motion, from the body style the settings name (shared figure size ``view.size``)."""
     style = STYLES[settings.body]
-    return [style.mesh(m, settings, view.size) for m in motions]
+    meshes = [style.mesh(m, settings, view.size) for m in motions]
+    for mesh in meshes:   # a style that draws on the floor (a contact shadow) learns the shared floor height
+        if hasattr(mesh, "floor_height"):
+            mesh.floor_height = view.floor_height
+    return meshes
 
 
 def render_video(motions, out, settings: RenderSettings | None = None, *, audio=None, captions=None,

@@ -7,6 +7,7 @@ whatever ``PYOPENGL_PLATFORM`` says) and reads back colour only.
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import asdict, dataclass, field
 
@@ -14,18 +15,15 @@ import numpy as np
 
 from evalsuite.errors import InputError
 from renderers._gl import import_pyrender, offscreen_renderer, set_samples
-from renderers.camera import FRAMINGS, UP_AXES, VIEWS, Camera, _unit, frame_points, view_direction
-from renderers.figure import (
-    FigureStyle,
-    body_size,
-    forward_direction,
-    head_index,
-    head_marker_centres,
-    leg_mask,
-    srgb_to_linear,
-)
+from renderers.camera import FRAMINGS, UP_AXES, VIEWS, Camera, _unit
+from renderers.figure import FigureStyle, srgb_to_linear
+from renderers.framing import View, make_view
 from renderers.skeleton import joint_list
 from renderers.styles import STYLES, BodyMesh
+
+__all__ = ["FACES", "FigureRenderer", "RenderSettings", "View", "make_view"]
+FACES = ("visible", "blank")
+_TOKENS = itertools.count()
 
 
 @dataclass(frozen=True)
@@ -48,6 +46,7 @@ class RenderSettings:
     drop_joints: tuple = ()           # joints not drawn nor framed, besides the non-body ones (renderers.skeleton)
     body: str = "stick"               # body style, a name in renderers.styles.STYLES
     character: str | None = None      # the character file of the "character" style (glTF 2.0 with a skin)
+    face: str = "visible"             # "visible": a face that shows where the head faces; "blank": a face mask
 
     def __post_init__(self):
         object.__setattr__(self, "drop_joints", joint_list(self.drop_joints))
@@ -72,6 +71,8 @@ class RenderSettings:
             raise InputError(STYLES.unknown(self.body).reason, field="body")
         if self.character is not None and not isinstance(self.character, str):
             raise InputError(f"expected the path of a character file, got {self.character!r}", field="character")
+        if self.face not in FACES:
+            raise InputError(f"unknown face {self.face!r}; expected one of {', '.join(FACES)}", field="face")
         if self.msaa not in (0, 2, 4, 8):
             raise InputError(f"msaa must be 0, 2, 4 or 8, got {self.msaa!r}", field="msaa")
 
@@ -96,84 +97,6 @@ class RenderSettings:
         elif isinstance(style, FigureStyle):
             d["style"] = style
         return cls(**d)
-
-
-@dataclass(frozen=True)
-class View:
-    """What the conditions of one segment share: camera, figure size and floor."""
-
-    camera: Camera
-    size: float
-    floor_height: float | None = None
-    floor_centre: tuple = (0.0, 0.0, 0.0)
-
-    def to_dict(self) -> dict:
-        return {"camera": self.camera.to_dict(), "size": float(self.size),
-                "floor_height": None if self.floor_height is None else float(self.floor_height),
-                "floor_centre": [float(x) for x in self.floor_centre]}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> View:
-        return cls(Camera.from_dict(d["camera"]), float(d["size"]), d["floor_height"], tuple(d["floor_centre"]))
-
-
-def _upper_mask(positions: np.ndarray, names, up: np.ndarray) -> np.ndarray:
-    legs = leg_mask(names)
-    if legs.any() and not legs.all():
-        return ~legs
-    # No recognisable leg names: keep joints in the upper ~55% of the mean pose's height.
-    heights = np.nanmean(positions @ up, axis=0)
-    lo, hi = float(np.nanmin(heights)), float(np.nanmax(heights))
-    return heights >= lo + 0.45 * (hi - lo)
-
-
-def make_view(position_sets, names_sets, settings: RenderSettings, parents_sets=None) -> View:
-    """The shared :class:`View` for several motions (the conditions of one segment).
-
-    Args:
-        position_sets: list of world positions ``(T, J, 3)``, one per condition.
-        names_sets: the joint names of each.
-        parents_sets: the parent indices of each (to place the head marker), optional.
-    """
-    if not position_sets:
-        raise InputError("no motion to frame")
-    up = UP_AXES[settings.up_axis]
-    size = float(np.median([body_size(p) for p in position_sets]))
-    forward = None
-    for pos, names in zip(position_sets, names_sets):
-        forward = forward_direction(pos, names, up)
-        if forward is not None:
-            break
-    if forward is None:
-        forward = np.array([0.0, 0.0, 1.0]) if settings.up_axis == "y" else np.array([0.0, -1.0, 0.0])
-    direction = view_direction(forward, settings.up_axis, settings.view, settings.elevation_deg)
-    style = settings.style
-    pts = []
-    for k, (pos, names) in enumerate(zip(position_sets, names_sets)):
-        pos = np.asarray(pos, float)
-        if style.head_marker:
-            head = head_index(names)
-            if head is not None:
-                parents = parents_sets[k] if parents_sets is not None else None
-                hp = int(parents[head]) if parents is not None else -1
-                centres = head_marker_centres(pos, head, hp, style.head_radius * size)
-                # the marker's extreme points along the world axes (it is much bigger than a joint)
-                r = style.head_radius * size
-                offsets = np.concatenate([np.eye(3), -np.eye(3)]) * r
-                pts.append((centres[:, None, :] + offsets[None]).reshape(-1, 3))
-        if settings.framing == "upper":
-            pos = pos[:, _upper_mask(pos, names, up)]
-        pts.append(pos.reshape(-1, 3))
-    cloud = np.concatenate(pts)
-    pad = size * style.joint_radius * 1.2
-    camera = frame_points(cloud, direction, settings.up_axis, settings.width, settings.height,
-                          yfov_deg=settings.yfov_deg, margin=settings.margin, pad=pad)
-    floor_height = None
-    centre = tuple(float(x) for x in np.nanmean(np.concatenate([p.reshape(-1, 3) for p in position_sets]), axis=0))
-    if style.floor:
-        all_pts = np.concatenate([np.asarray(p, float).reshape(-1, 3) for p in position_sets])
-        floor_height = float(np.nanmin(all_pts @ up)) - style.joint_radius * size
-    return View(camera, size, floor_height, centre)
 
 
 class FigureRenderer:
@@ -211,16 +134,17 @@ class FigureRenderer:
         # shadow-casting light frames its shadow map from these bounds.
         centre = np.asarray(view.floor_centre, float)
         self._bounds = np.stack([centre - 3.0 * view.size, centre + 3.0 * view.size])
+        self.material = pr.MetallicRoughnessMaterial(baseColorFactor=[1.0, 1.0, 1.0, 1.0], metallicFactor=0.0,
+                                                     roughnessFactor=0.7)
         if view.floor_height is not None:
             floor = self._floor_mesh(view, settings)
             floor._bounds = self._bounds
             self.scene.add(floor)
-        self.material = pr.MetallicRoughnessMaterial(baseColorFactor=[1.0, 1.0, 1.0, 1.0], metallicFactor=0.0,
-                                                     roughnessFactor=0.7)
         self._entries: dict = {}
         self._renderer = offscreen_renderer(pr, cam.width, cam.height, settings.msaa)
         self._clip = cam.projection() @ np.linalg.inv(cam.pose())   # world -> clip space
         self.partial_redraw = True
+        self._token = next(_TOKENS)   # the pixels outside the figure differ between renderers (floor, view)
 
     def _floor_mesh(self, view: View, settings: RenderSettings):
         pr = self._pr
@@ -235,10 +159,11 @@ class FigureRenderer:
         faces = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
         if np.dot(np.cross(corners[1] - corners[0], corners[2] - corners[0]), up) < 0:
             faces = faces[:, ::-1].copy()
+        # the figures' material and a vertex colour: a body style's floor-coloured vertices (the mannequin's
+        # contact shadow fades into the floor) are shaded exactly as the floor
+        colors = np.tile(srgb_to_linear(settings.style.floor_color), (4, 1)).astype(np.float32)
         prim = pr.Primitive(positions=corners.astype(np.float32), normals=np.tile(up, (4, 1)).astype(np.float32),
-                            indices=faces, material=pr.MetallicRoughnessMaterial(
-                                baseColorFactor=list(srgb_to_linear(settings.style.floor_color)) + [1.0], metallicFactor=0.0,
-                                roughnessFactor=1.0))
+                            color_0=colors, indices=faces, material=self.material)
         return pr.Mesh([prim])
 
     def render_vertices(self, vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray,
@@ -299,17 +224,17 @@ class FigureRenderer:
     def _scissor(self, inner, vertices):
         """``(x, y, w, h)`` GL rectangle that needs redrawing, or None for the whole frame.
 
-        Without a floor, everything outside the figure's projected bounding box is plain
-        background, so only the union of this frame's and the previous frame's boxes (the
+        Everything outside the figure's projected bounding box is plain background or the static
+        floor (unless the figure casts a shadow), so only the union of this frame's and the previous frame's boxes (the
         previous figure must be erased) is cleared, drawn and resolved; the rest of the
         context's buffers already hold background. On a CPU rasteriser, clearing and
         resolving the full multisampled frame cost more than drawing the figure.
         """
         cam = self.view.camera
         w, h = cam.width, cam.height
-        background = tuple(self.settings.style.background)
+        background = (tuple(self.settings.style.background), self._token)   # what lies outside the boxes
         rect = None
-        if self.partial_redraw and self.view.floor_height is None and not self.settings.style.shadow:
+        if self.partial_redraw and not self.settings.style.shadow:
             homo = vertices @ self._clip[:3, :3].T + self._clip[:3, 3]
             wcoord = vertices @ self._clip[3, :3] + self._clip[3, 3]
             if len(vertices) and np.all(wcoord > 1e-9):

@@ -58,4 +58,5 @@ def register_style(style: BodyStyle) -> BodyStyle:
 
 # The built-in styles, imported when first asked for (a style module may need trimesh, a glTF reader...).
 STYLES.register_lazy("stick", "renderers.styles.stick:STYLE")
+STYLES.register_lazy("mannequin", "renderers.styles.mannequin:STYLE")
 STYLES.register_lazy("character", "renderers.styles.character:STYLE")
