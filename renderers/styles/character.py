@@ -55,14 +55,16 @@ class CharacterMesh:
         n_v, n_j = len(character.vertices), len(character.joint_names)
         self.weights = np.zeros((n_v, n_j), dtype=np.float32)
         np.add.at(self.weights, (np.repeat(np.arange(n_v), 4), character.joints.ravel()), character.weights.ravel())
+        self._vertices = character.vertices.astype(np.float32)
+        self._normals = character.normals.astype(np.float32)
         self.faces = np.ascontiguousarray(character.faces, dtype=np.uint32)
         self.colors = np.repeat(srgb_to_linear(color)[None], n_v, axis=0).astype(np.float32)
 
     def vertices(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Vertex positions and normals ``(F, V, 3)`` float32 for the motion's joint positions ``(F, J, 3)``."""
         R, pos = self.rig.pose(positions)
-        c = self.character
-        return skin(self.weights, c.vertices, c.normals, c.bind_positions, R, pos, self.rig.scale)
+        return skin(self.weights, self._vertices, self._normals, self.character.bind_positions, R, pos,
+                    self.rig.scale)
 
 
 class CharacterStyle(BodyStyle):
