@@ -38,7 +38,6 @@ from scipy.stats import norm
 from sqlalchemy import select
 
 from evalsuite.analysis.ranking import bradley_terry
-from study_app.storage.tables import Answer, ParticipantSession, Plan
 
 __all__ = ["DEFAULT_EXPLORATION", "PRIOR", "Estimate", "Separation", "fit", "pair_gains", "choose_pair",
            "separation", "adaptive_options", "adaptive_record", "block_estimate", "assign_pair", "adaptive_status"]
@@ -150,6 +149,7 @@ def adaptive_record(spec: dict, by_file: dict, side: str) -> dict:
 
 def block_estimate(db, study, block_id: str) -> Estimate:
     """The estimate of one adaptive block from its stored answers (sessions that failed left out)."""
+    from study_app.storage.tables import Answer, ParticipantSession  # (the storage package imports the pages)
     rows = db.scalars(select(Answer.data).join(ParticipantSession, Answer.session_id == ParticipantSession.id)
                       .where(ParticipantSession.study == study.id, ParticipantSession.status != "failed",
                              Answer.page_id.like(f"{block_id}-%")))
@@ -173,6 +173,7 @@ def assign_pair(store, study, sid: str, index: int, spec: dict) -> dict:
     cfg = study.page(spec["block"]).cfg
     if not cfg.get("adaptive"):
         return spec
+    from study_app.storage.tables import ParticipantSession, Plan
     with store.ReadSession() as db:
         est = block_estimate(db, study, spec["block"])
     rng = random.Random(f"{study.seed}|adaptive|{sid}|{index}")
