@@ -81,7 +81,8 @@ def _analysis(opt: AnalysisOptions, kinds: set[str]) -> list[str]:
                    f" (`--tie-policy {opt.tie_policy}`), {opt.ci_method} {100 * (1 - opt.alpha):g} % CIs; a ranking "
                    f"by Bradley-Terry/Elo (prior {opt.elo_prior:g}) with {opt.n_boot} participant-bootstrap rounds "
                    f"(seed {opt.seed}); matched vs mismatched: share preferring the matched video, Barnard's exact "
-                   "test between conditions.")
+                   "test between conditions; audio mismatch: per system the share preferring the video with its own "
+                   "speech, exact binomial test against 50 % (Holm over the systems), systems ranked by that share.")
     if "mushra" in kinds:
         out.append(f"- Ratings 0-100: medians with order-statistic CIs; two-sided Wilcoxon signed-rank tests on pages "
                    f"rating both conditions (zero differences: `{opt.zero_method}`).")

@@ -192,6 +192,20 @@ def test_practice_of_an_audio_mismatch_block_uses_its_segments(tmp_path, stim):
         with_practice("s1", "s3, s4")
 
 
+def test_power_and_prereg_know_the_audio_mismatch_design(tmp_path, stim):
+    from study_app.planning import block_plans
+    from study_app.prereg import prereg_markdown
+
+    study = load_study(_study(tmp_path, stim, sessions=6))
+    plans = build_plans(study)
+    align = next(r for r in block_plans(study, plans) if r["block"] == "align")
+    assert align["pairs"] == [("SYSA", "SYSA:audio_mismatched"), ("SYSB", "SYSB:audio_mismatched")]
+    assert align["per_session"] == 2.0            # 4 pages per session, half for each system
+    text = prereg_markdown(study, plans)
+    assert "the same motion with another segment's speech of the same speaker" in text
+    assert "audio mismatch: per system the share preferring the video with its own speech" in text
+
+
 def test_derangement_moves_every_element():
     import random
 
