@@ -321,13 +321,9 @@
           var j = await r.json();
           sessionStorage.removeItem(tokenKey);
           leaving = true;
-          if (j.stale) {     // answered in another tab or window first: nothing of this tab's is stored
-            msg.textContent = j.error;
-            msg.setAttribute("data-kind", "error");
-            G.stale(j.next);
-          } else {
-            G.go(j.next);
-          }
+          // stale: answered in another tab or window first; nothing of this tab's is stored
+          if (j.stale) { msg.textContent = j.error; msg.setAttribute("data-kind", "error"); G.stale(j.next); }
+          else G.go(j.next);
           return;
         }
         if (r && r.status >= 400 && r.status < 500) {
