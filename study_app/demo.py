@@ -112,6 +112,7 @@ def study_definition(manifest_path: pathlib.Path, study_dir: pathlib.Path) -> di
 
 def run(out_dir: pathlib.Path, echo) -> None:
     from study_app.definition import load_study
+    from study_app.derived import write_derived
     from study_app.design import balance_report, build_plans, default_plans_path, write_plans
 
     target = out_dir / "study"
@@ -120,6 +121,7 @@ def run(out_dir: pathlib.Path, echo) -> None:
     study_path = target / "study.yaml"
     study_path.write_text(yaml.safe_dump(study_definition(manifest, target), sort_keys=False))
     study = load_study(study_path)
+    write_derived(study.manifest, progress=False)     # video-only copies for the muted blocks, as `study build`
     plans = build_plans(study)
     plans_path = write_plans(plans, default_plans_path(study))
     pairs = balance_report(plans, study)["pairs"]

@@ -206,6 +206,20 @@ def test_power_and_prereg_know_the_audio_mismatch_design(tmp_path, stim):
     assert "audio mismatch: per system the share preferring the video with its own speech" in text
 
 
+def test_the_demo_study_on_clips_with_sound_is_served_as_built(tmp_path):
+    from study_app import demo
+    from study_app.design import default_plans_path
+
+    make_av_stimuli(tmp_path / "render" / "stimuli", ["natural", "baseline", "system"], ["seg01", "seg02", "seg03"],
+                    seconds=0.5)
+    demo.run(tmp_path, lambda *a: None)
+    study = load_study(tmp_path / "study" / "study.yaml")
+    plans = read_plans(default_plans_path(study), study)          # the derived clips exist
+    by_file = study.manifest.by_file()
+    shown = [p for plan in plans["plans"] for p in plan["pages"] if p["type"] == "pairwise"]
+    assert shown and all(by_file[p["a"]].silent and by_file[p["b"]].silent for p in shown)
+
+
 def test_derangement_moves_every_element():
     import random
 
