@@ -9,6 +9,7 @@ import click
 
 from evalsuite.errors import InputError
 from evalsuite.motion.smplx_option import smplx_model_option
+from renderers.styles import STYLES
 
 
 def _settings_options(fn):
@@ -18,15 +19,27 @@ def _settings_options(fn):
         click.option("--height", type=int, default=480, show_default=True, help="Height of one panel in pixels."),
         click.option("--view", type=click.Choice(["front", "three-quarter", "side"]), default="front",
                      show_default=True, help="Camera preset; framed automatically from the motion."),
-        click.option("--framing", type=click.Choice(["full", "upper"]), default="full", show_default=True,
-                     help="Frame the full body or the upper body."),
+        click.option("--style", "body", type=click.Choice(STYLES.names()), default="stick", show_default=True,
+                     help="Body style: stick figure, mannequin (a neutral body for any skeleton), character (a "
+                          "skinned glTF character, see --character) or an installed plug-in's."),
+        click.option("--character", type=click.Path(exists=True, dir_okay=False), default=None,
+                     help="glTF 2.0 character file (.glb/.gltf with a skin) for --style character."),
+        click.option("--framing", type=click.Choice(["full", "above-knees", "upper"]), default="full",
+                     show_default=True,
+                     help="Frame the full body, down to the knees (the GENEA Leaderboard's cut, hides foot "
+                          "sliding), or the upper body."),
+        click.option("--face", type=click.Choice(["visible", "blank"]), default="visible", show_default=True,
+                     help="visible: the head shows where it faces (nose and visor); blank: a plain head, a face "
+                          "mask as the GENEA Leaderboard uses (the stick figure has no face either way)."),
         click.option("--fps", type=float, default=None,
                      help="Video frame rate; the motion is resampled to it (default: the motion's own)."),
         click.option("--up", "up_axis", type=click.Choice(["y", "z"]), default="y", show_default=True,
                      help="The motion's up axis."),
         click.option("--msaa", type=click.Choice(["0", "2", "4", "8"]), default="4", show_default=True,
                      help="Multisample anti-aliasing samples (0: jagged edges, about 10% faster)."),
-        click.option("--floor/--no-floor", default=False, show_default=True, help="Draw a floor plane."),
+        click.option("--floor/--no-floor", default=None,
+                     help="Draw a floor plane (default: when the body style stands on one, as the mannequin does, "
+                          "with a soft contact shadow)."),
         click.option("--shadow/--no-shadow", default=False, show_default=True,
                      help="Cast the figure's shadow on the floor (implies --floor; slower)."),
         click.option("--head/--no-head", default=True, show_default=True, help="Draw a head marker."),
@@ -51,11 +64,13 @@ def _settings(kw):
     from renderers.scene import RenderSettings
 
     shadow = kw.pop("shadow")
-    style = FigureStyle(floor=kw.pop("floor") or shadow, shadow=shadow, head_marker=kw.pop("head"))
+    floor = kw.pop("floor")
+    style = FigureStyle(floor=True if shadow else floor, shadow=shadow, head_marker=kw.pop("head"))
     return RenderSettings(width=kw.pop("width"), height=kw.pop("height"), view=kw.pop("view"),
                           framing=kw.pop("framing"), fps=kw.pop("fps"), up_axis=kw.pop("up_axis"),
                           msaa=int(kw.pop("msaa")), crf=kw.pop("crf"), center=kw.pop("center"),
-                          style=style, drop_joints=kw.pop("drop_joints"))
+                          style=style, drop_joints=kw.pop("drop_joints"), body=kw.pop("body"),
+                          character=kw.pop("character"), face=kw.pop("face"))
 
 
 def _echo_warnings(fn):
@@ -86,7 +101,7 @@ def _captions(captions, paths):
 
 @click.group()
 def render():
-    """Render motion as stick-figure videos offscreen (no display or GPU needed).
+    """Render motion as videos offscreen (no display or GPU needed): stick figure, mannequin or character.
 
     Videos are H.264 MP4 with the speech audio muxed in sync: a cut (--start/--end) cuts
     the audio with the motion. Conditions shown together share one camera, framed
@@ -181,7 +196,10 @@ def still(motions, out, frame, time_s, captions, layout, cols, start, end, **kw)
                    "equal_size, else off).")
 @click.option("--bitrate", default=None, metavar="RATE",
               help="Bitrate of --equal-size cbr, e.g. 400k (default: the config's bitrate, else 400k).")
-def stimuli(config, jobs, dask_address, force, equal_size, bitrate):
+@click.option("--mute/--no-mute", default=None,
+              help="Videos without sound even where segments have audio, as realism studies use (default: the "
+                   "config's mute, else sound).")
+def stimuli(config, jobs, dask_address, force, equal_size, bitrate, mute):
     """Render every condition x segment of CONFIG, plus attention checks, with blinded names.
 
     Writes the videos and a private manifest.csv (file -> condition, segment, kind,
@@ -196,7 +214,7 @@ def stimuli(config, jobs, dask_address, force, equal_size, bitrate):
     if bitrate is not None and not BITRATE_RE.match(bitrate):
         raise InputError(f"expected a bitrate such as 400k or 1.5M, got {bitrate!r}", field="--bitrate")
     result = build_stimuli(config, jobs=jobs, dask_address=dask_address, force=force, echo=click.echo,
-                           equal_size=equal_size, bitrate=bitrate)
+                           equal_size=equal_size, bitrate=bitrate, mute=mute)
     click.echo(f"{result['rendered']} rendered, {result['skipped']} up to date; manifest: {result['manifest']}")
 
 

@@ -4,7 +4,7 @@ Uses the condition folders an earlier step wrote (``out_dir/conditions/<conditio
 their speech (``out_dir/speech/<segment>.wav``) or, if there are none, the bundled BVH samples with synthesised
 speech-like audio (tone bursts).
 Writes ``out_dir/render/compare.mp4``, ``compare.png`` and ``out_dir/render/stimuli/``
-(blinded videos + ``manifest.csv``).
+(blinded videos + ``manifest.csv``), all drawn with the mannequin body style.
 """
 from __future__ import annotations
 
@@ -56,7 +56,7 @@ def run(out_dir: pathlib.Path, echo) -> None:
             write_wav(audio_dir / f"{seg}.wav", speech_like_audio(SECONDS, RATE, seed=k), RATE)
 
     seg = segments[0]
-    settings = RenderSettings(width=240, height=180, framing="full", fps=30.0)
+    settings = RenderSettings(width=240, height=180, framing="full", fps=30.0, body="mannequin")
     paths = [pattern.format(segment=seg) for pattern in conditions.values()]
     motions = prepare_motions(paths, settings, 0.0, seconds)
     names = list(conditions)
@@ -75,7 +75,7 @@ def run(out_dir: pathlib.Path, echo) -> None:
         "conditions": conditions,
         "start": 0.0,
         "end": seconds,
-        "render": {"width": 192, "height": 144, "fps": 30.0, "framing": "full"},
+        "render": {"width": 192, "height": 144, "fps": 30.0, "framing": "full", "style": "mannequin"},
         "equal_size": "cbr",      # a file's size must not tell a participant which condition it shows
         "bitrate": "300k",
         "attention_checks": [

@@ -89,6 +89,10 @@ class RenderSettings:
             raise InputError(f"unknown render setting(s) {', '.join(sorted(unknown))}; expected any of "
                              f"{', '.join(cls.__dataclass_fields__)}", field="render")
         style = d.pop("style", None)
+        if isinstance(style, str):   # ``style: mannequin`` names the body style (the CLI's --style)
+            if "body" in d and d["body"] != style:
+                raise InputError(f"style {style!r} and body {d['body']!r} disagree; give one", field="style")
+            d["body"], style = style, None
         if isinstance(style, dict):
             unknown = set(style) - set(FigureStyle.__dataclass_fields__)
             if unknown:

@@ -10,7 +10,9 @@ A YAML (or JSON) config says what to render (paths relative to the config file):
     audio: audio/{segment}.wav           # optional; cut with the motion (start-end)
     start: 0                             # optional cut (seconds) for every segment
     end: 10
-    render: {width: 640, height: 480, view: front, framing: upper, fps: 30}
+    render: {width: 640, height: 480, view: front, framing: upper, fps: 30,
+             style: mannequin, face: blank}  # style: stick, mannequin, character (+ character: FILE) or a plug-in's
+    mute: false                          # true: videos without sound even where segments have audio
     attention_checks:
       - {check: instruction, segment: seg01, condition: natural,
          text: "Attention: please rate this video 73", expected: "73", appear_s: 3}
@@ -54,7 +56,9 @@ from renderers.filesize import pad_group
 from renderers.stimuli_config import load_config
 
 # Part of every input hash: bump it when a change to the renderer changes how videos look.
-RENDERER_VERSION = "evalsuite-renderers-2"   # 2: audio cut with the motion; non-body joints left out
+# 2: audio cut with the motion; non-body joints left out. 3: body styles, the camera aimed at the mean root,
+# above-knees framing, floor shaded like the figures
+RENDERER_VERSION = "evalsuite-renderers-3"
 MANIFEST_COLUMNS = list(manifest_contract.COLUMNS)
 
 
@@ -103,13 +107,21 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
     bitrate = cfg.get("bitrate") if cfg.get("equal_size") == "cbr" else None
     key = blinding_key(out)
     conds = list(cfg["conditions"])
+    if cfg.get("mute") and any(chk["check"] == "distorted_audio" for chk in cfg["checks"]):
+        raise InputError("the stimuli are muted (mute: true): a distorted_audio attention check has no sound to "
+                         "distort; use distorted_video or instruction", field="attention_checks")
+    character = ""
+    if settings.character:
+        if not pathlib.Path(settings.character).is_file():
+            raise InputError("character file not found", path=settings.character, field="render.character")
+        character = file_sha256(settings.character)
     render_jobs, by_pair = [], {}
     for seg, opts in cfg["segments"].items():
         paths = {c: _resolve(cfg["base"], cfg["conditions"][c], seg) for c in conds}
         for c, p in paths.items():
             if not p.is_file():
                 raise InputError(f"motion file of condition {c!r}, segment {seg!r} not found", path=p)
-        audio = _resolve(cfg["base"], opts["audio"], seg) if opts.get("audio") else None
+        audio = _resolve(cfg["base"], opts["audio"], seg) if opts.get("audio") and not cfg.get("mute") else None
         if audio is not None and not audio.is_file():
             raise InputError(f"audio of segment {seg!r} not found", path=audio)
         motions = prepare_motions([paths[c] for c in conds], settings, opts["start"], opts["end"])
@@ -122,6 +134,7 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
                     "start": opts["start"], "end": opts["end"], "settings": settings.to_dict(), "view": view,
                     "bitrate": bitrate}
             spec["input_hash"] = _hash({"v": RENDERER_VERSION, "motion": file_sha256(paths[c]), "audio": audio_hash,
+                                        **({"character": character} if character else {}),
                                         "settings": spec["settings"], "view": view, "start": spec["start"],
                                         "end": spec["end"], **({"bitrate": bitrate} if bitrate else {})})
             render_jobs.append(spec)
@@ -216,14 +229,15 @@ def _describe_spec(spec: dict) -> str:
 
 
 def build_stimuli(config, *, jobs: int = 1, dask_address: str | None = None, force: bool = False,
-                  echo=print, equal_size: str | None = None, bitrate: str | None = None) -> dict:
+                  echo=print, equal_size: str | None = None, bitrate: str | None = None,
+                  mute: bool | None = None) -> dict:
     """Render every condition x segment and the attention checks of ``config``; write the manifest.
-    ``equal_size`` and ``bitrate`` override the config's keys of those names.
+    ``equal_size``, ``bitrate`` and ``mute`` override the config's keys of those names.
 
     Returns ``{"manifest": path, "rendered": n, "skipped": n, "rows": [...]}``.
     """
     cfg = load_config(config)
-    cfg.update({k: v for k, v in (("equal_size", equal_size), ("bitrate", bitrate)) if v is not None})
+    cfg.update({k: v for k, v in (("equal_size", equal_size), ("bitrate", bitrate), ("mute", mute)) if v is not None})
     render_jobs, attention_jobs = plan(cfg)
     manifest = cfg["output"] / "manifest.csv"
     old = {} if force else read_manifest(manifest)

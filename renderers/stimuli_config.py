@@ -31,7 +31,7 @@ def load_config(path) -> dict:
     if not isinstance(raw, dict):
         raise InputError("expected a mapping at the top level", path=path)
     known = {"output", "segments", "conditions", "audio", "start", "end", "render", "attention_checks", "layout",
-             "drop_joints", "equal_size", "bitrate"}
+             "drop_joints", "equal_size", "bitrate", "mute"}
     unknown = set(raw) - known
     if unknown:
         raise InputError(f"unknown key(s) {', '.join(sorted(unknown))}; expected any of {', '.join(sorted(known))}",
@@ -70,6 +70,8 @@ def load_config(path) -> dict:
         raise InputError("expected a mapping of render settings, with drop_joints there or at the top level, "
                          "not both", path=path, field="render")
     render = {**render, **({"drop_joints": raw["drop_joints"]} if raw.get("drop_joints") is not None else {})}
+    if isinstance(render.get("character"), str):   # relative to the config file, like the motion paths
+        render["character"] = str((base / render["character"]).resolve())
     try:
         cfg["settings"] = RenderSettings.from_dict(render)
     except TypeError as exc:
@@ -84,6 +86,9 @@ def load_config(path) -> dict:
     if not BITRATE_RE.match(bitrate):
         raise InputError(f"expected a bitrate such as 400k or 1.5M, got {bitrate!r}", path=path, field="bitrate")
     cfg["bitrate"] = bitrate
+    if not isinstance(raw.get("mute", False), bool):
+        raise InputError(f"expected true or false, got {raw['mute']!r}", path=path, field="mute")
+    cfg["mute"] = bool(raw.get("mute", False))   # videos without sound (realism studies), even with segment audio
     checks = raw.get("attention_checks") or []
     if not isinstance(checks, list):
         raise InputError("expected a list", path=path, field="attention_checks")

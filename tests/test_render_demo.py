@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import csv
 
+import imageio.v3
 import imageio_ffmpeg
+import yaml
 
 from renderers.demo import find_conditions, run
 
@@ -16,6 +18,10 @@ def test_demo_step_renders_a_comparison_and_a_study_stimuli_set(tmp_path):
     assert frames == 90
     assert abs(seconds - 3.0) < 1e-6
     assert (tmp_path / "render" / "compare.png").is_file()
+    # the mannequin by default: it stands on a floor (the stick figure has none)
+    still = imageio.v3.imread(tmp_path / "render" / "compare.png")
+    assert still[-3].astype(int).sum(axis=1).min() < 3 * 240
+    assert yaml.safe_load((tmp_path / "render" / "stimuli.yaml").read_text())["render"]["style"] == "mannequin"
     with open(tmp_path / "render" / "stimuli" / "manifest.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     conditions, segments = find_conditions(tmp_path)
