@@ -106,6 +106,10 @@ class MediaLog:
             for s, p, k, t in rows:
                 self.record(s, p, k, t)
 
+    def write_served(self, rows: list) -> None:
+        """Write ``media_served`` rows (session, page, slot, first, last, total, status, time) now."""
+        self.write(INSERT_SERVED, rows)
+
     def insert_served(self, rows: list) -> None:
         """Write ``media_served`` rows in one transaction (PostgreSQL: without waiting for the disk)."""
         names = ("session_id", "page_index", "slot", "first_byte", "last_byte", "total", "status", "served_at")

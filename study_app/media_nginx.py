@@ -79,7 +79,6 @@ def parse_line(line: str) -> tuple[str, int, int, int, int, int, int, dt.datetim
 
 def ingest(media_log, path: str) -> int:
     """Append the new lines of nginx's media log ``path`` to ``media_served``; returns the rows written."""
-    from study_app.media_log import INSERT_SERVED
     try:
         with open(path + ".offset", "a+") as state:
             fcntl.flock(state, fcntl.LOCK_EX)       # released when the file is closed
@@ -102,7 +101,7 @@ def ingest(media_log, path: str) -> int:
                         ParticipantSession.id.in_({r[0] for r in rows}))))
                 rows = [r for r in rows if r[0] in known]
             if rows:
-                media_log.write(INSERT_SERVED, rows)
+                media_log.write_served(rows)
             state.seek(0)
             state.truncate()
             state.write(f"{st.st_ino} {offset + len(complete)}\n")
