@@ -82,15 +82,20 @@ class BodyModel:
     n_shape: int                # shape components
     n_expr: int                 # expression components
     path: str
+    j_shapedirs: np.ndarray     # (55, 3, S) J_regressor · shapedirs (shape, then expression components)
 
     def shape_joints(self, betas: np.ndarray) -> np.ndarray:
-        """J(β) (55, 3): the formula of the module docstring, evaluated on the vertices."""
-        return _rest_joints_uncached(pathlib.Path(self.path), self, betas)
+        """J(β) (55, 3): the formula of the module docstring, J_regressor · (v_template + shapedirs · β), with
+        J_regressor applied first (the same sum; the model file is read once, not once per speaker)."""
+        betas = np.asarray(betas, dtype=np.float64)
+        if not len(betas):
+            return np.array(self.j_template)
+        joints: np.ndarray = self.j_template + self.j_shapedirs[..., :len(betas)] @ betas
+        return joints
 
 
 _MODELS: dict[tuple[str, int, int], BodyModel] = {}
 _JOINTS: dict[tuple[str, bytes], np.ndarray] = {}
-_EXPR: dict[tuple[str, int], np.ndarray] = {}
 
 
 def _sha256(path: pathlib.Path) -> str:
@@ -157,19 +162,11 @@ def load_body_model(model_path: str | os.PathLike[str]) -> BodyModel:
         raise InputError(f"found shape {kt.shape}; expected (2, {N_JOINTS}) with the SMPL-X parent table",
                          path=path, field="kintree_table")
     n_shape, n_expr = _shape_split(sd.shape[2])
-    model = BodyModel(_sha256(path), jr.astype(np.float64) @ v.astype(np.float64), n_shape, n_expr,
-                      os.fspath(path))
+    jr = jr.astype(np.float64)
+    j_dirs = (jr @ sd.reshape(n_verts, -1).astype(np.float64)).reshape(N_JOINTS, 3, sd.shape[2])
+    model = BodyModel(_sha256(path), jr @ v.astype(np.float64), n_shape, n_expr, os.fspath(path), j_dirs)
     _MODELS[key] = model
     return model
-
-
-def _rest_joints_uncached(path: pathlib.Path, model: BodyModel, betas: np.ndarray) -> np.ndarray:
-    arr = _arrays(path, ("v_template", "shapedirs", "J_regressor"))
-    v_shaped = arr["v_template"].astype(np.float64)
-    if len(betas):
-        v_shaped = v_shaped + arr["shapedirs"][..., :len(betas)].astype(np.float64) @ betas
-    joints: np.ndarray = arr["J_regressor"].astype(np.float64) @ v_shaped
-    return joints
 
 
 def rest_joints(model_path: str | os.PathLike[str], betas: np.ndarray,
@@ -210,12 +207,7 @@ def _expression_joints(model: BodyModel, n_expr: int) -> np.ndarray:
         raise InputError(f"{n_expr} expression coefficients but this model has {model.n_expr}; use "
                          "SMPLX_NEUTRAL_2020.npz (100) or the leaderboard mode (expressions zeroed)",
                          path=model.path, field="shapedirs")
-    key = (model.sha256, n_expr)
-    if key not in _EXPR:
-        arr = _arrays(pathlib.Path(model.path), ("shapedirs", "J_regressor"))
-        dirs = arr["shapedirs"][..., model.n_shape:model.n_shape + n_expr].astype(np.float64)
-        _EXPR[key] = np.einsum("jv,vce->jce", arr["J_regressor"].astype(np.float64), dirs)
-    return _EXPR[key]
+    return model.j_shapedirs[..., model.n_shape:model.n_shape + n_expr]
 
 
 # Frames computed together: (55, 3, 3, block) temporaries stay small, and frames-last arrays make the 3x3
