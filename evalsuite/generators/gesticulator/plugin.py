@@ -10,6 +10,7 @@ paper's Table 2: ``inputs=audio`` / ``inputs=text``, ``autoregressive=false``, `
 from __future__ import annotations
 
 import pathlib
+import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -23,6 +24,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
+from evalsuite.generators.datastream import stream_arrays
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
@@ -141,9 +143,11 @@ class Gesticulator(Generator):
 
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), "expmap")
-        tr = corpus_arrays(train, rep, audio_recipe=AUDIO_RECIPE, words=st["words"])
+        data = tempfile.TemporaryDirectory(prefix="gesticulator-data-")  # features memory-mapped, not in memory
+        tr_speech, tr_poses, first = stream_arrays(train, rep, pathlib.Path(data.name), audio_recipe=AUDIO_RECIPE,
+                                                   words=st["words"])
         va = corpus_arrays(val, rep, audio_recipe=AUDIO_RECIPE, words=st["words"]) if val else []
-        audio_dim, text_dim = tr[0].audio.shape[1], tr[0].text.shape[1]  # type: ignore[union-attr]
+        audio_dim, text_dim = first.audio.shape[1], first.text.shape[1]  # type: ignore[union-attr]
         config = GesticulatorConfig(audio_dim=audio_dim, text_dim=text_dim, pose_dim=rep.dim,
                                     use_audio="audio" in st["inputs"], use_text="text" in st["inputs"],
                                     autoregressive=st["autoregressive"], film=st["film"], past=st["past"],
@@ -154,19 +158,20 @@ class Gesticulator(Generator):
         schedule = replace(budgeted_schedule(st["epochs"]), batch_size=st["batch_size"],
                            learning_rate=st["learning_rate"], lr_schedule=st["lr_schedule"],
                            sequence=st["past"] + PREDICTED_FRAMES + st["future"])
-        model = train_gesticulator([a.speech for a in tr], [a.poses for a in tr], config, schedule,
+        model = train_gesticulator(tr_speech, tr_poses, config, schedule, data_dir=pathlib.Path(data.name),
                                    seed=seed, val_speech=[a.speech for a in va],
                                    val_poses=[a.poses for a in va], budget_seconds=budget_seconds(budget_minutes),
                                    patience=st["patience"], weight_decay=st["weight_decay"],
                                    scale_floor=st["scale_floor"], velocity_weight=st["velocity_weight"],
                                    ema=st["ema"], on_epoch=progress)
+        data.cleanup()
         rep.save(out_dir)
         sha = save_state(out_dir, "gesticulator.pt", model.net)
         np.savez(out_dir / "normalisers.npz", speech_mean=model.speech_norm.mean, speech_std=model.speech_norm.std,
                  pose_mean=model.pose_norm.mean, pose_std=model.pose_norm.std)
         write_json(out_dir / "settings.json", {**st, "net": config.to_dict(), "audio_recipe": AUDIO_RECIPE})
         del torch
-        return TrainingResult(out_dir, model.history, {"weights_sha256": sha, "train_segments": len(tr),
+        return TrainingResult(out_dir, model.history, {"weights_sha256": sha, "train_segments": len(train),
                                                         "val_segments": len(va)})
 
     # -- generation ----------------------------------------------------------------------------------------

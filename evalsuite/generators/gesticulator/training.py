@@ -13,8 +13,10 @@ consecutive frames every 16 frames, then every 8, every 4, and finally always. S
 from __future__ import annotations
 
 import math
+import pathlib
+import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +24,7 @@ import torch
 from torch import nn
 
 from evalsuite.generators import checkpoints
+from evalsuite.generators.datastream import SegmentStore, Windows, mean_std
 from evalsuite.generators.early_stopping import BestWeights
 from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
 from evalsuite.generators.scaling import floored_spread
@@ -77,9 +80,10 @@ class Normaliser:
     @classmethod
     def fit(cls, arrays: Sequence[np.ndarray], floor: float = 0.0) -> Normaliser:
         """``floor``: a dimension's standard deviation is taken as at least this fraction of the widest one's
-        (:func:`~evalsuite.generators.scaling.floored_spread`; 0: unit variance for every dimension)."""
-        x = np.concatenate(arrays, axis=0)
-        return cls(x.mean(axis=0), floored_spread(x.std(axis=0), floor))
+        (:func:`~evalsuite.generators.scaling.floored_spread`; 0: unit variance for every dimension). One
+        segment at a time (:func:`~evalsuite.generators.datastream.mean_std`: the concatenation's figures)."""
+        mean, std = mean_std(arrays)
+        return cls(mean, floored_spread(std, floor))
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         return ((x - self.mean) / self.std).astype(np.float32)
@@ -114,6 +118,27 @@ def make_sequences(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], co
     if not xs:
         raise ValueError(f"no segment is long enough for {length}-frame training sequences")
     return np.stack(xs), np.stack(ys)
+
+
+def sequence_windows(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], speech_norm: Normaliser,
+                     pose_norm: Normaliser, config: GesticulatorConfig, length: int, stride: int,
+                     folder: pathlib.Path) -> tuple[Windows, Windows]:
+    """:func:`make_sequences`'s windows of the normalised segments, without making them: each segment normalised
+    and padded as there, written to ``folder`` (memory-mapped .npy), and gathered batch by batch."""
+    def padded(norm: Normaliser, arrays: Sequence[np.ndarray], speech_side: bool) -> Iterator[np.ndarray]:
+        for a in arrays:
+            a = norm(a)
+            if speech_side:
+                yield np.concatenate([np.zeros((config.past, a.shape[1]), np.float32), a,
+                                      np.zeros((config.future, a.shape[1]), np.float32)])
+            else:
+                yield np.concatenate([np.repeat(a[:1], config.past, 0), a, np.repeat(a[-1:], config.future, 0)])
+
+    xs = Windows(SegmentStore(folder / "speech_windows.npy", padded(speech_norm, speech, True)), length, stride)
+    ys = Windows(SegmentStore(folder / "pose_windows.npy", padded(pose_norm, poses, False)), length, stride)
+    if not len(xs):
+        raise ValueError(f"no segment is long enough for {length}-frame training sequences")
+    return xs, ys
 
 
 def _rollout(net: GesticulatorNet, x: torch.Tensor, y: torch.Tensor, autoregressive: bool,
@@ -155,18 +180,29 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
                        budget_seconds: float | None = None, patience: int | None = None,
                        weight_decay: float = 0.0, scale_floor: float = 0.0,
                        velocity_weight: float = velocity_weight, ema: float = 0.0,
-                       on_epoch: Callable[[dict], None] | None = None) -> TrainedGesticulator:
+                       on_epoch: Callable[[dict], None] | None = None,
+                       data_dir: pathlib.Path | None = None) -> TrainedGesticulator:
     """Train on segments of (speech (T, A+X), poses (T, D)); deterministic for a seed on one machine.
 
     With ``budget_seconds`` the schedule is compressed so that its stages still run in order: training stops
     when the budget is spent, and the history says so. With validation data the weights of the best validation
-    epoch are kept (``patience``: stop after that many epochs without improvement)."""
+    epoch are kept (``patience``: stop after that many epochs without improvement). The training windows are
+    memory-mapped from a temporary folder in ``data_dir`` (default: the system's), not held in memory."""
+    with tempfile.TemporaryDirectory(prefix="gesticulator-data-", dir=data_dir) as tmp:
+        return _train(speech, poses, config, schedule, seed, val_speech, val_poses, budget_seconds, patience,
+                      weight_decay, scale_floor, velocity_weight, ema, on_epoch, pathlib.Path(tmp))
+
+
+def _train(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], config: GesticulatorConfig,
+           schedule: TrainSchedule, seed: int, val_speech: Sequence[np.ndarray], val_poses: Sequence[np.ndarray],
+           budget_seconds: float | None, patience: int | None, weight_decay: float, scale_floor: float,
+           velocity_weight: float, ema: float, on_epoch: Callable[[dict], None] | None,
+           folder: pathlib.Path) -> TrainedGesticulator:
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     speech_norm, pose_norm = Normaliser.fit(speech), Normaliser.fit(poses, scale_floor)
-    x, y = make_sequences([speech_norm(s) for s in speech], [pose_norm(p) for p in poses], config,
-                          schedule.sequence, schedule.stride)
-    xt, yt = torch.from_numpy(x), torch.from_numpy(y)
+    xt, yt = sequence_windows(speech, poses, speech_norm, pose_norm, config, schedule.sequence, schedule.stride,
+                              folder)
     val = None
     if len(val_speech):
         vx, vy = make_sequences([speech_norm(s) for s in val_speech], [pose_norm(p) for p in val_poses],
@@ -189,8 +225,8 @@ def train_gesticulator(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray]
         order = rng.permutation(len(xt))
         total, n = 0.0, 0
         for i in range(0, len(order), schedule.batch_size):
-            idx = torch.from_numpy(order[i:i + schedule.batch_size])
-            xb, yb = xt[idx], yt[idx]
+            idx = order[i:i + schedule.batch_size]
+            xb, yb = torch.from_numpy(xt[idx]), torch.from_numpy(yt[idx])
             pred = _rollout(net, xb, yb, autoregressive and config.autoregressive, period)
             loss = _loss(pred, yb[:, config.past:schedule.sequence - config.future], velocity_weight)
             opt.zero_grad()

@@ -1,0 +1,147 @@
+"""Training data on disk: segments' arrays in one memory-mapped ``.npy`` file, statistics and training windows
+read from it in chunks, so that a training's memory does not grow with hours of corpus.
+
+:class:`SegmentStore` appends each segment's ``(T_i, D)`` array to ``FILE.npy`` as it is computed (one segment in
+memory at a time) and opens the file with ``numpy.load(mmap_mode="r")``; ``store[i]`` is segment ``i`` as a view
+of the map. :func:`mean_std` gives exactly (bit for bit) what ``np.concatenate(arrays).mean(0)`` and ``.std(0)``
+give, one segment at a time: both sums run over the frames in order, as numpy's reduction over axis 0 does
+for two or more columns (a single column is concatenated: it is small). :class:`Windows` stands for the
+``(N, length, D)`` array of overlapping training windows without making it: ``windows[idx]`` gathers a batch
+from the map.
+"""
+from __future__ import annotations
+
+import pathlib
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+from evalsuite.corpus.types import Segment
+from evalsuite.generators.pose_repr import PoseRepresentation
+from evalsuite.generators.reimpl import SegmentArrays, corpus_arrays
+
+__all__ = ["SegmentStore", "mean_std", "Windows", "stream_arrays"]
+
+_HEADER = 128  # bytes of the .npy header (version 1.0), written once with room for any shape
+
+
+def _npy_header(shape: tuple[int, ...], dtype: np.dtype) -> bytes:
+    text = f"{{'descr': '{dtype.str}', 'fortran_order': False, 'shape': {shape}, }}"
+    text = text.ljust(_HEADER - 10 - 1) + "\n"
+    return b"\x93NUMPY\x01\x00" + len(text).to_bytes(2, "little") + text.encode("latin1")
+
+
+class SegmentStore(Sequence[np.ndarray]):
+    """Arrays ``(T_i, D)`` of one dtype, one after another in ``path`` (a ``.npy`` file), memory-mapped.
+
+    ``SegmentStore(path, arrays)`` writes them all; or ``SegmentStore(path)``, then :meth:`append` each array
+    and :meth:`finish`."""
+
+    def __init__(self, path: str | pathlib.Path, arrays: Iterable[np.ndarray] | None = None,
+                 dtype: Any = None):
+        self.path = pathlib.Path(path)
+        self.dtype = np.dtype(dtype) if dtype is not None else None  # None: the first array's
+        self._lengths: list[int] = []
+        self._width: int | None = None
+        self._fh = open(self.path, "wb")  # noqa: SIM115 (closed by finish())
+        self._fh.write(_npy_header((0, 0), np.dtype(np.float32)))  # rewritten by finish()
+        if arrays is not None:
+            for a in arrays:
+                self.append(a)
+            self.finish()
+
+    def append(self, a: np.ndarray) -> None:
+        self.dtype = self.dtype or np.asarray(a).dtype
+        a = np.ascontiguousarray(a, dtype=self.dtype)
+        if a.ndim != 2 or (self._width is not None and a.shape[1] != self._width):
+            raise ValueError(f"segment arrays must be (T, {self._width or 'D'}), got {a.shape}")
+        self._width = a.shape[1]
+        self._fh.write(a.tobytes())
+        self._lengths.append(len(a))
+
+    def finish(self) -> SegmentStore:
+        """Write the header's shape, close the file and map it (read-only)."""
+        self._fh.seek(0)
+        self._fh.write(_npy_header((sum(self._lengths), self._width or 0), self.dtype or np.dtype(np.float32)))
+        self._fh.close()
+        self.lengths = np.asarray(self._lengths, np.int64)
+        self.offsets = np.concatenate([[0], np.cumsum(self.lengths)]).astype(np.int64)
+        self.data: np.ndarray = np.load(self.path, mmap_mode="r")
+        return self
+
+    @property
+    def width(self) -> int:
+        return int(self.data.shape[1])
+
+    def __len__(self) -> int:
+        return len(self.lengths)
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        return self.data[self.offsets[i]:self.offsets[i + 1]]
+
+
+def mean_std(arrays: Iterable[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Per-column mean and standard deviation of the arrays' rows, in the first array's dtype, equal bit for bit
+    to ``x.mean(0), x.std(0)`` of ``x = np.concatenate(arrays)`` (arrays of one dtype), one array at a time:
+    ``mean = (sum_t x_t) / N`` and ``std = sqrt((sum_t (x_t - mean)^2) / N)``, each sum in frame order."""
+    items = arrays if isinstance(arrays, Sequence) else list(arrays)
+    dtype = np.asarray(items[0]).dtype if len(items) else np.dtype(np.float32)
+    if len(items) and np.asarray(items[0]).shape[1] == 1:  # one column: numpy sums it pairwise, not in order
+        x = np.concatenate(list(items))
+        return x.mean(0), x.std(0)
+    total, n = None, 0
+    for a in items:
+        a = np.asarray(a, dtype)
+        total = a.sum(0) if total is None else np.add.reduce(np.concatenate([total[None], a]), axis=0)
+        n += len(a)
+    if total is None or n == 0:
+        raise ValueError("no frames to compute a mean from")
+    mean = np.true_divide(total, n, dtype=dtype)
+    sq = None
+    for a in items:
+        d = np.asarray(a, dtype) - mean
+        d = np.multiply(d, d, out=d)
+        sq = d.sum(0) if sq is None else np.add.reduce(np.concatenate([sq[None], d]), axis=0)
+    assert sq is not None
+    return mean, np.sqrt(np.true_divide(sq, n, dtype=dtype))
+
+
+class Windows:
+    """The ``(N, length, D)`` windows every ``stride`` frames of each segment of a store (padded segments), as
+    ``np.stack`` of the slices would hold them, gathered on demand: ``windows[idx]`` is ``(len(idx), length, D)``."""
+
+    def __init__(self, store: SegmentStore, length: int, stride: int):
+        starts = []
+        for i, n in enumerate(store.lengths.tolist()):
+            first = int(store.offsets[i])
+            starts += [first + s for s in range(0, max(n - length, 0) + 1, stride) if s + length <= n]
+        self.store, self.length = store, length
+        self.starts = np.asarray(starts, np.int64)
+
+    def __len__(self) -> int:
+        return len(self.starts)
+
+    def __getitem__(self, idx: np.ndarray) -> np.ndarray:
+        rows = self.starts[np.asarray(idx)][:, None] + np.arange(self.length)
+        return np.asarray(self.store.data[rows])
+
+
+def stream_arrays(segments: Sequence[Segment], rep: PoseRepresentation, folder: pathlib.Path, *,
+                  audio_recipe: str | None, words: str | None,
+                  timing: bool = True) -> tuple[SegmentStore, SegmentStore, SegmentArrays]:
+    """:func:`~evalsuite.generators.reimpl.corpus_arrays` one segment at a time, written to ``folder``: the
+    speech features ``(T, A + X)`` and poses ``(T, D)`` as two stores (``speech.npy``, ``poses.npy``), and the
+    first segment's arrays (for the feature sizes)."""
+    speech, poses = SegmentStore(folder / "speech.npy"), SegmentStore(folder / "poses.npy")
+    first: SegmentArrays | None = None
+    for seg in segments:
+        arrays = corpus_arrays([seg], rep, audio_recipe=audio_recipe, words=words, timing=timing)[0]
+        first = first or arrays
+        speech.append(arrays.speech)
+        poses.append(arrays.poses)
+    if first is None:
+        raise ValueError("no segment to train on")
+    return speech.finish(), poses.finish(), first

@@ -1,0 +1,49 @@
+"""evalsuite.generators.datastream: segments memory-mapped on disk, their statistics and training windows exactly as
+the in-memory arrays would give them."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from evalsuite.generators.datastream import SegmentStore, Windows, mean_std
+from evalsuite.generators.gesticulator.net import GesticulatorConfig
+from evalsuite.generators.gesticulator.training import Normaliser, make_sequences, sequence_windows
+
+
+def _segments(width, dtype=np.float32, n=12, seed=0):
+    rng = np.random.default_rng(seed)
+    return [rng.normal(3.0, 2.0, size=(int(rng.integers(1, 400)), width)).astype(dtype) for _ in range(n)]
+
+
+@pytest.mark.parametrize("width,dtype", [(1, np.float32), (2, np.float32), (45, np.float64), (197, np.float32)])
+def test_mean_and_std_one_segment_at_a_time_equal_the_concatenations_bit_for_bit(width, dtype):
+    arrays = _segments(width, dtype)
+    x = np.concatenate(arrays)
+    mean, std = mean_std(arrays)
+    assert mean.dtype == dtype and np.array_equal(mean, x.mean(0)) and np.array_equal(std, x.std(0))
+
+
+def test_a_store_is_a_memory_mapped_npy_of_the_segments(tmp_path):
+    arrays = _segments(7, np.float64)
+    store = SegmentStore(tmp_path / "a.npy", arrays)
+    assert isinstance(store.data, np.memmap) and store.data.dtype == np.float64
+    assert np.array_equal(np.load(tmp_path / "a.npy"), np.concatenate(arrays))
+    assert len(store) == len(arrays) and all(np.array_equal(store[i], a) for i, a in enumerate(arrays))
+    with pytest.raises(ValueError, match="segment arrays"):
+        SegmentStore(tmp_path / "b.npy", [np.zeros((3, 2)), np.zeros((3, 4))])
+
+
+def test_windows_gather_what_make_sequences_stacks(tmp_path):
+    config = GesticulatorConfig(audio_dim=3, text_dim=2, pose_dim=4, past=2, future=3)
+    speech, poses = _segments(5, seed=1), _segments(4, seed=2)
+    for s, p in zip(speech, poses):   # one length per segment on both sides
+        n = min(len(s), len(p))
+        s.resize((n, 5), refcheck=False)
+        p.resize((n, 4), refcheck=False)
+    sn, pn = Normaliser.fit(speech), Normaliser.fit(poses)
+    x, y = make_sequences([sn(s) for s in speech], [pn(p) for p in poses], config, 20, 6)
+    xs, ys = sequence_windows(speech, poses, sn, pn, config, 20, 6, tmp_path)
+    assert len(xs) == len(x) == len(ys)
+    idx = np.random.default_rng(0).permutation(len(x))[:17]
+    assert np.array_equal(xs[idx], x[idx]) and np.array_equal(ys[idx], y[idx])
+    assert isinstance(xs, Windows) and (tmp_path / "speech_windows.npy").exists()
