@@ -117,6 +117,19 @@ def test_muted_pairs_serve_video_only_copies(tmp_path, stim):
         assert len(decode_audio(stim / copy)) == 0
 
 
+def test_a_muted_page_naming_a_clip_with_sound_serves_its_video_only_copy(tmp_path, stim):
+    from study_app.pages import get_kind
+
+    study = load_study(_study(tmp_path, stim))
+    silent = study.page("realism").cfg["silent"]
+    src = sorted(silent)[:2]
+    spec = {"type": "pairwise", "block": "realism", "a": src[0], "b": src[1], "position_a": "right"}
+    kind = get_kind("pairwise")
+    assert [kind.media(study, spec, k).file for k in (0, 1)] == [silent[src[1]], silent[src[0]]]
+    spec["block"] = "align"
+    assert [kind.media(study, spec, k).file for k in (0, 1)] == [src[1], src[0]]
+
+
 def test_serving_refuses_plans_whose_derived_clips_are_missing(tmp_path, stim):
     study = load_study(_study(tmp_path, stim))
     path = write_plans(build_plans(study), tmp_path / "plans.json")

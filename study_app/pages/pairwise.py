@@ -163,7 +163,11 @@ class PairwiseKind(BlockKind):
         return 2
 
     def media(self, study: Any, spec: dict, slot: int) -> Media:
-        return Media(file=spec["a"] if (slot == 0) == (spec["position_a"] == "left") else spec["b"])
+        """The slot's clip; in a muted block its video-only copy even where the plan names the clip itself
+        (e.g. a pair chosen while the study runs)."""
+        file = spec["a"] if (slot == 0) == (spec["position_a"] == "left") else spec["b"]
+        silent = study.page(spec["block"]).cfg["silent"] if "block" in spec else {}
+        return Media(file=silent.get(file, file))
 
     def page_data(self, study: Any, spec: dict, cfg: dict) -> dict:
         levels = cfg["levels"]
