@@ -181,7 +181,9 @@ def read_skinned_gltf(path) -> SkinnedMesh:
             p = parent_node.get(p)
         parents.append(index[p] if p is not None else -1)
     names = [str(nodes[n].get("name", f"joint{j}")) for j, n in enumerate(joint_nodes)]
-    return SkinnedMesh(vertices, normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12),
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.where(length > 1e-8, normals / np.maximum(length, 1e-12), [0.0, 0.0, 1.0])   # unused vertices
+    return SkinnedMesh(vertices, normals,
                        faces.astype(np.uint32), joints, weights, names, np.array(parents, dtype=np.int64), bind,
                        os.fspath(path))
 

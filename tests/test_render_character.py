@@ -297,3 +297,20 @@ def test_a_character_file_with_a_joint_map_beside_it_renders_through_the_setting
                               msaa=0)
     img = render_frames([arm_motion()], settings, frames=[3])[0]
     assert np.any(img < 200)
+
+
+def test_a_motion_in_the_characters_rest_pose_leaves_the_mesh_as_modelled():
+    """SMPL-X joint names on the character's own bind positions (in centimetres): every bone keeps its rest
+    rotation, so the skinned mesh is the modelled one, scaled by 100 and shifted with the root."""
+    character = load_character()
+    entries = shipped_maps()["smplx"]
+    names, rows = [], []
+    for cj, motion_names in entries.items():
+        names.append(motion_names[0])
+        rows.append(character.bind_positions[character.joint_names.index(cj)] * 100.0 + [5.0, 0.0, -3.0])
+    rest = np.array(rows)[None].repeat(3, axis=0)
+    mesh = CharacterMesh(character, names, rest)
+    assert mesh.map_name == "smplx" and mesh.rig.scale == pytest.approx(100.0)
+    verts, norms = mesh.vertices(rest)
+    assert np.allclose(verts, character.vertices * 100.0 + [5.0, 0.0, -3.0], atol=1e-3)
+    assert np.allclose(norms, character.normals, atol=1e-4)
