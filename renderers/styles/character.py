@@ -70,6 +70,7 @@ class CharacterMesh:
 class CharacterStyle(BodyStyle):
     name = "character"
     description = "a skinned glTF character (evalsuite's CC0 MakeHuman body, or --character FILE) driven by a joint map"
+    frame_pad = 0.06   # the body's thickness beyond its joints, as a fraction of the figure size (framing)
 
     def __init__(self, character=None, joint_map=None):
         self.character = character
