@@ -155,7 +155,7 @@ class FigureRenderer:
         up = UP_AXES[settings.up_axis]
         a = _unit(np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0]))
         b = np.cross(up, a)
-        half = 3.0 * view.size
+        half = 25.0 * view.size   # its far edge lies near the horizon, not across the picture
         c = np.asarray(view.floor_centre, float)
         c = c - np.dot(c, up) * up + view.floor_height * up
         corners = np.array([c - half * a - half * b, c + half * a - half * b,
