@@ -41,7 +41,8 @@ measure a variant the same way (e.g. ``--only aud2repr2pose --set dae_inputs=pos
 
 Usage: python benchmarks/bench_generators.py [--minutes 30] [--seed 0] [--train-seed S | --train-seeds S,S,...]
        [--corpus DIR] [--budget 9] [--only NAME ...] [--set KEY=VALUE ...] [--mogan-ablations mse_only,...]
-       [--out DIR]
+       [--out DIR] [--preset cpu-small|paper]
+Every row names the preset the systems were trained with (evalsuite train --preset; docs/generators.md).
 Prints the tables (Markdown) and writes them to OUT/criteria.md / .csv, OUT/criteria_seeds.md (with several
 training seeds) and OUT/criteria_issue15.md / .json.
 Other processes on the machine slow every timing down; the script prints the load average.
@@ -135,6 +136,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mogan-ablations", default="mse_only",
                     help=f"ferstl-mogan ablations trained beside it, comma-separated: {', '.join(MOGAN_ABLATIONS)}")
     ap.add_argument("--out", type=pathlib.Path, default=None)
+    ap.add_argument("--preset", default="cpu-small", choices=("cpu-small", "paper"),
+                    help="the systems' preset (evalsuite train --preset); --set options override it")
     args = ap.parse_args(argv)
     ablations = [a for a in args.mogan_ablations.split(",") if a]
     unknown = sorted(set(ablations) - set(MOGAN_ABLATIONS))
@@ -193,14 +196,14 @@ def main(argv: list[str] | None = None) -> int:
         run = name if len(seeds) == 1 else f"{name}_seed{seed}"   # folder names
         t1 = time.perf_counter()
         result = train(entry, corpus, out / "models" / run, seed=seed, budget_minutes=args.budget,
-                       config=config, progress=False)
+                       config=config, progress=False, preset=args.preset)
         train_s = time.perf_counter() - t1
         t2 = time.perf_counter()
         generate(entry, reqs, out / run, model_dir=out / "models" / run, progress=False, check_determinism=False)
         gen_s = time.perf_counter() - t2
         own = evaluate_condition(out / run, corpus)
         trained.setdefault(name, (result, train_s, own))   # issue 15's rows: the first seed's model
-        row = {"generator": name, **({"train_seed": seed} if len(seeds) > 1 else {}),
+        row = {"generator": name, "preset": args.preset, **({"train_seed": seed} if len(seeds) > 1 else {}),
                "epochs": len(result.history), "train_s": round(train_s),
                "speed_x_realtime": round(speech_s / gen_s), "pose_err_vs_mean_pose": own["pose_mse"] / base["pose_mse"],
                "energy_speed_r": own.get("energy_speed_r"),
@@ -233,9 +236,11 @@ def main(argv: list[str] | None = None) -> int:
         result, _, own = trained["gesture2vec"]
         issue15 += gesture2vec_rows(corpus, out, result, own["lexical_mean"], natural["lexical_mean"])
     if "ferstl-mogan" in trained:
-        issue15 += ferstl_mogan_rows(corpus, out, trained["ferstl-mogan"][:2], ablations, seeds[0], args.budget)
+        issue15 += ferstl_mogan_rows(corpus, out, trained["ferstl-mogan"][:2], ablations, seeds[0], args.budget,
+                                     args.preset)
     if issue15:
-        lines = ["| system | criterion | measured | bound | holds |", "|---|---|---|---|---|"]
+        lines = [f"Preset: {args.preset}", "", "| system | criterion | measured | bound | holds |",
+                 "|---|---|---|---|---|"]
         for system, what, value, op, bound in issue15:
             holds = "reported" if op == "report" else ("yes" if HOLDS[op](value, bound) else "**no**")
             lines.append(f"| {system} | {what} | {value:.4g} | {bound:.4g} | {holds} |")
@@ -267,7 +272,7 @@ def gesture2vec_rows(corpus, out: pathlib.Path, result, lexical: float, natural_
 
 
 def ferstl_mogan_rows(corpus, out: pathlib.Path, full: tuple, ablations: list[str], seed: int,
-                      budget: float) -> list[tuple]:
+                      budget: float, preset: str = "cpu-small") -> list[tuple]:
     """Issue 15's criteria for ``ferstl-mogan`` (trained in OUT/models/ferstl-mogan) against its ablations,
     each trained here with the same seed and budget; two samples per test segment; Figure 1-style plots."""
     from evalsuite.generators import criteria as C
@@ -287,7 +292,7 @@ def ferstl_mogan_rows(corpus, out: pathlib.Path, full: tuple, ablations: list[st
         else:
             t1 = time.perf_counter()
             result = train(entry, corpus, out / "models" / name, seed=seed, budget_minutes=budget,
-                           config={"ablation": ab}, progress=False)
+                           config={"ablation": ab}, progress=False, preset=preset)
             train_s = time.perf_counter() - t1
         t2 = time.perf_counter()
         generate(entry, reqs, out / "samples" / name, model_dir=out / "models" / name, samples=2, progress=False,
