@@ -9,6 +9,7 @@ import click
 
 from evalsuite.corpus.cli import on_mismatch_option
 from evalsuite.errors import InputError
+from evalsuite.generators.cli_options import device_options, joints_option
 from evalsuite.generators.presets import DEFAULT_PRESET, PRESETS
 from evalsuite.generators.registry import find_generator, list_generators
 
@@ -157,6 +158,7 @@ def check_command(name: str, config_file: str | None, settings: tuple[str, ...],
 @click.option("-j", "--jobs", type=int, default=1, show_default=True, help="Local worker processes.")
 @click.option("--dask", "dask_address", help="dask.distributed scheduler address.")
 @click.option("--no-determinism-check", is_flag=True, help="Skip generating the first segment twice.")
+@device_options
 @on_mismatch_option
 @click.option("-o", "--out", required=True, type=click.Path(file_okay=False), help="Output folder.")
 def generate_command(name: str, corpus: str | None, split: str, segments: tuple[str, ...], audio: str | None,
@@ -215,6 +217,8 @@ def generate_command(name: str, corpus: str | None, split: str, segments: tuple[
 @click.option("--resume", is_flag=True,
               help="Carry on from OUT/checkpoints (same generator, options, seed and preset): a killed training "
                    "resumed ends with the same weights as one that ran through.")
+@joints_option
+@device_options
 @on_mismatch_option
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of weights, data order and noise.")
 @click.option("-o", "--out", required=True, type=click.Path(file_okay=False), help="Model folder to write.")

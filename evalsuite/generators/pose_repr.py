@@ -16,11 +16,18 @@ skeleton.
 
 The representation resamples to its own frame rate (20 fps, as all four papers) on the way in. A model folder
 keeps it as ``representation.json`` plus ``template.bvh`` (one frame).
+
+Which joints are modelled: the ``joints`` argument, else the ones :func:`modelled_joints` set for the training
+in progress (``evalsuite train --joints``), else the first preset of :mod:`evalsuite.generators.joint_presets`
+that the skeleton has. Names given explicitly must all be in the skeleton; a preset's absent members are left out.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import json
 import pathlib
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,12 +37,29 @@ from evalsuite.motion import Motion
 from evalsuite.motion.io import load_motion, save_motion
 from evalsuite.motion.joint_rotations import rotation_joints, with_rotation_vectors
 from evalsuite.motion.ops import resample
-from evalsuite.motion.presets import GENEA2020_UPPER
 
-__all__ = ["PoseRepresentation", "KINDS", "MODEL_FPS"]
+__all__ = ["PoseRepresentation", "KINDS", "MODEL_FPS", "modelled_joints"]
 
 KINDS = ("expmap", "rotmat", "positions")
 MODEL_FPS = 20.0   # the frame rate of all four seed papers' models
+
+# (names, given explicitly) of the joints to model in the training in progress; None: the default preset
+_JOINTS: contextvars.ContextVar[tuple[list[str], bool] | None] = contextvars.ContextVar("modelled_joints",
+                                                                                        default=None)
+
+
+@contextlib.contextmanager
+def modelled_joints(value: str | Sequence[str] | None) -> Iterator[list[str] | None]:
+    """Within the block, representations made by :meth:`PoseRepresentation.from_motion` without ``joints``
+    model these (a preset of :mod:`evalsuite.generators.joint_presets` or joint names); None: the default."""
+    from evalsuite.generators.joint_presets import JOINT_PRESETS, resolve_joint_option
+
+    names = resolve_joint_option(value)
+    token = _JOINTS.set(None if names is None else (names, not (isinstance(value, str) and value in JOINT_PRESETS)))
+    try:
+        yield names
+    finally:
+        _JOINTS.reset(token)
 
 
 @dataclass
@@ -48,19 +72,30 @@ class PoseRepresentation:
     @classmethod
     def from_motion(cls, motion: Motion, kind: str = "expmap", joints: list[str] | None = None,
                     fps: float = MODEL_FPS) -> PoseRepresentation:
-        """A representation of the joints (default: the GENEA 2020 upper body present in the motion) of the
-        motion's skeleton; its first frame is the template."""
+        """A representation of the joints (default: the module doc's) of the motion's skeleton; its first frame
+        is the template."""
         if kind not in KINDS:
             raise InputError(f"unknown pose representation {kind!r}; expected one of {', '.join(KINDS)}")
         if not motion.is_hierarchical:
             raise InputError("the re-implemented generators learn from BVH motion (joint rotations); this motion "
                              "holds positions only", path=motion.source)
-        rotating = {motion.joint_names[j] for j, _, _ in rotation_joints(motion)}
-        wanted = joints or GENEA2020_UPPER
+        from evalsuite.generators.joint_presets import default_joints
+
+        rotating = [motion.joint_names[j] for j, _, _ in rotation_joints(motion)]
+        explicit = joints is not None
+        if joints is None and _JOINTS.get() is not None:
+            joints, explicit = _JOINTS.get()  # type: ignore[misc]
+        wanted = list(joints) if joints is not None else default_joints(rotating)
+        if explicit:
+            missing = [j for j in wanted if j not in rotating]
+            if missing:
+                raise InputError(f"--joints: the skeleton has no joint(s) {', '.join(missing)} with rotation "
+                                 f"channels", path=motion.source, field="--joints")
         chosen = [j for j in wanted if j in rotating]
         if len(chosen) < 3:
             raise InputError(f"the skeleton has too few of the joints {', '.join(wanted[:6])}… with rotation "
-                             f"channels ({len(chosen)}); name the joints to model", path=motion.source)
+                             f"channels ({len(chosen)}); name the joints to model with --joints PRESET|names "
+                             f"(docs/generators.md)", path=motion.source, field="--joints")
         return cls(kind, chosen, float(fps), motion.with_values(motion.values[:1].copy()))
 
     # -- encoding ----------------------------------------------------------------------------------------

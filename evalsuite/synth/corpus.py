@@ -24,6 +24,7 @@ from evalsuite.synth.grammar import KEYWORD_CLASSES, LEXICON, choose_emphasis, m
 from evalsuite.synth.layout import FORMAT, FORMAT_VERSION, SPLIT_DIRS, format_tsv, segment_paths
 from evalsuite.synth.model import oracle_motion
 from evalsuite.synth.params import KINDS, PHASES, MotionParams
+from evalsuite.synth.skeletons import SKELETONS, retarget, smplx_rotations
 from evalsuite.synth.speech import Voice, WordBank, espeak_version
 
 __all__ = ["Layout", "synthesize_corpus", "assign_splits"]
@@ -118,16 +119,32 @@ def _word_onsets(audio: np.ndarray, rate: int, transcript: Transcript) -> list[l
     return [[round(float(o - w.start), 4) for o in on if w.start <= o < w.end] for w in transcript.words]
 
 
+def _write_motion(path: pathlib.Path, motion: Any, skeleton: str, fps: float) -> None:
+    """The segment's motion on ``skeleton``: BVH, or SMPL-X rotations (``<id>.npz`` in the same folder)."""
+    if skeleton == "smplx":
+        from evalsuite.motion.smplx import SmplxData, write_smplx
+
+        poses, trans = smplx_rotations(motion)
+        write_smplx(path.with_suffix(".npz"), SmplxData(poses, trans, np.zeros(0), model="smplx2020",
+                                                         gender="neutral", fps=fps))
+        return
+    m = retarget(motion, skeleton)
+    path.write_text(format_bvh(m.skeleton, m.values, 1.0 / fps), encoding="utf-8", newline="\n")
+
+
 def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0, *, layout: Layout | None = None,
                       voice: Voice | None = None, params: MotionParams | None = None, speaker: str = "synth01",
-                      jobs: int = 2, progress: bool = True) -> dict[str, Any]:
+                      jobs: int = 2, progress: bool = True, skeleton: str = "genea2020") -> dict[str, Any]:
     """Write a synthetic-speaker corpus of about ``minutes`` minutes to ``out_dir``; returns ``corpus.json``'s
-    content. See docs/corpus.md § The synthetic speaker for the model and the files."""
+    content. See docs/corpus.md § The synthetic speaker for the model and the files. ``skeleton``: the speaker's
+    own (``genea2020``) or another one (:mod:`evalsuite.synth.skeletons`)."""
     from tqdm import tqdm
 
     layout, voice, params = layout or Layout(), voice or Voice(), params or MotionParams()
     if not minutes > 0:
         raise InputError(f"minutes must be positive, got {minutes!r}", field="minutes")
+    if skeleton not in SKELETONS:
+        raise InputError(f"unknown skeleton {skeleton!r}; expected one of {', '.join(SKELETONS)}", field="--skeleton")
     root = pathlib.Path(out_dir)
     if root.exists() and any(root.iterdir()):
         raise InputError("the output folder exists and is not empty", path=root)
@@ -149,6 +166,8 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
         "lexicon": {k: list(v) for k, v in LEXICON.items()},
         "split_dirs": SPLIT_DIRS, "splits": {s: [] for s in SPLIT_DIRS}, "segments": {},
     }
+    if skeleton != "genea2020":
+        meta["skeleton"] = skeleton
     for idx in tqdm(range(n_seg), desc="synthetic speaker", unit="segment", disable=not progress):
         seg_id, split = f"seg_{idx:03d}", splits[idx]
         rng = np.random.default_rng([seed, 2, idx])
@@ -160,8 +179,7 @@ def synthesize_corpus(out_dir: str | pathlib.Path, minutes: float, seed: int = 0
         for p in paths.values():
             p.parent.mkdir(parents=True, exist_ok=True)
         write_wav(paths["wav"], audio.astype(np.float64) / 32768.0, int(bank.rate or 22050))
-        paths["bvh"].write_text(format_bvh(motion.skeleton, motion.values, 1.0 / params.fps), encoding="utf-8",
-                                newline="\n")
+        _write_motion(paths["bvh"], motion, skeleton, params.fps)
         paths["tsv"].write_text(format_tsv(transcript), encoding="utf-8", newline="\n")
         paths["labels"].write_text(labels.to_csv(), encoding="utf-8", newline="\n")
         meta["splits"][split].append(seg_id)

@@ -26,6 +26,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
+from evalsuite.generators.joint_presets import ARM_JOINTS, WRIST_JOINTS
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
@@ -46,8 +47,6 @@ AUDIO_RECIPE = "mfcc_f0_ferstl"
 DISCRIMINATORS = ("phase", "realism", "minibatch", "displacement")
 ABLATIONS = {"none": DISCRIMINATORS, "mse_only": ("mse_only",),
              **{f"no_{d}": tuple(x for x in DISCRIMINATORS if x != d) for d in DISCRIMINATORS}}
-ARM_JOINTS = ("RightShoulder", "RightArm", "RightForeArm", "RightHand", "LeftShoulder", "LeftArm", "LeftForeArm",
-              "LeftHand")
 CORE_DEVIATIONS = (  # the core's (net.DEVIATIONS imports torch; a test checks they agree)
     "Seeded noise channels are appended to the generator's speech input so that one model gives k different "
     "samples per segment (the paper's generator reads speech only).",
@@ -127,7 +126,7 @@ class FerstlMogan(Generator):
         from evalsuite.generators.ferstl_mogan.phases import corpus_phases, heuristic_phases, to_classes
 
         speech, poses, phases = [], [], []
-        wrists = [rep.joints.index(j) for j in ("RightHand", "LeftHand") if j in rep.joints]
+        wrists = [rep.joints.index(j) for j in WRIST_JOINTS if j in rep.joints]
         for s in segs:
             motion = s.load_motion()
             pos = rep.encode(motion)
@@ -151,8 +150,8 @@ class FerstlMogan(Generator):
         torch_setup(seed, st["threads"])
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), "positions")
-        if sum(j in rep.joints for j in ("RightHand", "LeftHand")) < 1:
-            raise GeneratorError("ferstl-mogan needs the wrists (RightHand/LeftHand) among the modelled joints")
+        if not any(j in rep.joints for j in WRIST_JOINTS):
+            raise GeneratorError(f"ferstl-mogan needs a wrist ({'/'.join(WRIST_JOINTS)}) among the modelled joints")
         source = "corpus" if st["phase_labels"] == "corpus" and all(s.labels for s in (*train, *val)) else "heuristic"
         speech, poses, phases = self._arrays(train, rep, source == "corpus")
         held = val if val else train
