@@ -55,6 +55,19 @@ def _blocks(study: Study) -> list[str]:
     return lines
 
 
+def _adaptive_rule(study: Study) -> str:
+    """The stopping-rule sentence for adaptive pairwise blocks (study_app.adaptive), or no interim analysis."""
+    blocks = [b for b in study.blocks.values() if b.cfg.get("adaptive")]
+    if not blocks:
+        return " No interim analysis."
+    names = ", ".join(f"`{b.id}` (exploration {b.cfg['exploration']:g})" for b in blocks)
+    return (f" Adaptive pairwise blocks {names}: the server chooses each page's pair from the Bradley-Terry "
+            "estimate of the answers so far (the most informative pair, or a uniform one at the exploration rate), "
+            "so their comparisons are not balanced. It reports when every two neighbours in the estimated ranking "
+            "are separated (95 % intervals of their differences exclude 0; `evalsuite study status`), an interim "
+            f"look without correction. {TODO}: state whether data collection stops there or at the planned sessions.")
+
+
 def _measures(study: Study) -> list[str]:
     out = []
     for b in study.blocks.values():
@@ -167,7 +180,7 @@ def prereg_markdown(study: Study, plans: dict, options: AnalysisOptions | None =
                                      f"{study.sessions} sessions give power {r['achieved']:.2f}" for r in power),
         "Stopping rule": f"Data collection stops when {study.sessions} sessions have finished (every plan used once; "
                          + ("plans of failed sessions are released to new participants" if study.release_failed
-                            else "plans of failed sessions are not reused") + "). No interim analysis.",
+                            else "plans of failed sessions are not reused") + ")." + _adaptive_rule(study),
         "Manipulated variables": f"The system that generated the motion (conditions {', '.join(conditions)}), within "
                                  "participants; the speech segment; for matched/mismatched blocks whether motion and "
                                  "speech belong together.",

@@ -266,3 +266,16 @@ def test_study_status_command_says_whether_the_ranking_separated(tmp_path):
     assert re.search(r"ranking separated: the study may stop|[01] of 2 neighbouring pairs separated: not separated",
                      res.output)
     assert "sessions: 6 started, 0 active, 6 finished, 0 failed, 0 expired; 24 answers" in res.output
+
+
+def test_the_preregistration_draft_states_the_adaptive_stopping_rule(tmp_path):
+    from study_app.design import build_plans
+    from study_app.prereg import prereg_markdown
+    path = h.make_study(tmp_path, yaml_text=ADAPTIVE_YAML.format(sessions=4, exploration=0.3))
+    study = load_study(path)
+    text = prereg_markdown(study, build_plans(study))
+    rule = text.split("Stopping rule", 1)[1].split("\n#", 1)[0]
+    assert "Adaptive pairwise blocks `hl` (exploration 0.3)" in rule and "No interim analysis" not in rule
+    assert "**TO COMPLETE**: state whether data collection stops there" in rule
+    plain = load_study(h.make_study(tmp_path / "plain"))
+    assert "No interim analysis." in prereg_markdown(plain, build_plans(plain))
