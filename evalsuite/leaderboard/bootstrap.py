@@ -20,7 +20,7 @@ import numpy as np
 from evalsuite.leaderboard import metrics as lm
 from evalsuite.metrics.frechet import trace_sqrt_product
 
-__all__ = ["Pieces", "recording_bootstrap", "leaderboard_bootstrap"]
+__all__ = ["Pieces", "pooled_gaussian", "recording_bootstrap", "leaderboard_bootstrap"]
 
 _Stats = tuple[int, np.ndarray, np.ndarray]   # (n, mean (D,), centred sum of squares (D, D))
 
@@ -58,6 +58,14 @@ class Pieces:
         for side, x in zip(sides, (a, b)):
             if x is not None and len(x):
                 side.append(_stats(x))
+
+
+def pooled_gaussian(pieces: list[Pieces], metric: str, side: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mean (D,) and unbiased covariance (D, D) of every row of ``side`` (0: ground truth, 1: predictions) of a
+    Fréchet distance over ``pieces``: :func:`evalsuite.leaderboard.metrics.gaussian` of the pooled rows, from the
+    recordings' statistics (equal up to rounding; the rows need not be held)."""
+    n, mu, m2 = _merge([s for p in pieces for s in p.fd[metric][side]])
+    return mu, np.atleast_2d(m2 / (n - 1))
 
 
 def _fd(pieces: list[Pieces], metric: str) -> float:
