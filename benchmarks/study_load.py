@@ -37,6 +37,7 @@ import io
 import json
 import os
 import re
+import resource
 import secrets
 import shutil
 import sys
@@ -250,6 +251,7 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
         crash["restarted"] = True
 
     t0 = time.perf_counter()
+    cpu0 = group_cpu([server.proc.pid, nginx.proc.pid]), resource.getrusage(resource.RUSAGE_SELF)
     if kill_after is not None:
         threading.Thread(target=killer, daemon=True).start()
     errors = []
@@ -260,6 +262,11 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
                 if f.exception() is not None:
                     errors.append(repr(f.exception()))
         wall = time.perf_counter() - t0
+        # CPU seconds of gunicorn and nginx during the run (a crash run counts only the restarted server)
+        # and of the simulated browsers in this process
+        server_cpu = group_cpu([server.proc.pid, nginx.proc.pid]) - (0.0 if crash else cpu0[0])
+        self_cpu = resource.getrusage(resource.RUSAGE_SELF)
+        client_cpu = (self_cpu.ru_utime + self_cpu.ru_stime) - (cpu0[1].ru_utime + cpu0[1].ru_stime)
         raw, rows = fetch_export(nginx.url)
     finally:
         server.stop()
@@ -268,8 +275,25 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
     finished = sum(1 for s in raw["sessions"] if s["status"] == "finished")
     lat = {f"{kind}_p{q}": pct(stats[kind], q) for kind in ("enter", "page", "answer", "video") for q in (50, 95, 99)}
     return {"name": name, "participants": participants, "wall_s": wall, "finished": finished, "errors": errors,
-            "crash": crash, "retries": sum(c.retries for c in clients),
+            "crash": crash, "retries": sum(c.retries for c in clients), "server_cpu_s": server_cpu,
+            "client_cpu_s": client_cpu,
             "answers_per_s": check["acknowledged"] / wall, **lat, **check}
+
+
+def group_cpu(groups):
+    """CPU seconds (user + system) used so far by the live processes of these process groups (Linux /proc)."""
+    ticks, total = os.sysconf("SC_CLK_TCK"), 0
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as fh:
+                fields = fh.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[2]) in groups:
+            total += int(fields[11]) + int(fields[12])
+    return total / ticks
 
 
 def warm_up(base, n):
@@ -292,6 +316,9 @@ def report(r):
     print(f"\n== {r['name']} ==")
     print(f"participants finished: {r['finished']}   wall time: {r['wall_s']:.1f} s   "
           f"answers/s: {r['answers_per_s']:.0f}   client retries: {r['retries']}")
+    print(f"CPU: gunicorn + nginx {r['server_cpu_s']:.1f} s ({1000 * r['server_cpu_s'] / max(r['acknowledged'], 1):.0f} ms "
+          f"per answer with its page and videos, {r['server_cpu_s'] / r['wall_s']:.2f} cores on average), simulated "
+          f"browsers {r['client_cpu_s']:.1f} s; load average now {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     for kind, label in (("enter", "entry (Prolific link)"), ("page", "page view"), ("answer", "answer POST"),
                         ("video", "video GET (nginx)")):
         print(f"{label:22s} p50 {r[kind + '_p50']:6.0f} ms   p95 {r[kind + '_p95']:6.0f} ms   "
