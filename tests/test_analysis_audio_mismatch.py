@@ -78,6 +78,21 @@ def test_per_system_share_binomial_ci_holm_and_rank():
     assert len(between) == 6 and set(between["condition_1"]) | set(between["condition_2"]) == set(COUNTS)
 
 
+def test_leaderboard_win_rate_counts_strong_twice_and_ties_half():
+    # SYSA: 3 strong + 2 weak matched, 1 strong + 1 weak mismatched, 2 ties (5-level)
+    spec = ["a"] * 5 + ["b"] * 2 + ["tie"] * 2
+    strength = ["strong"] * 3 + ["weak"] * 2 + ["strong", "weak"] + ["", ""]
+    pw = pd.DataFrame({"question": "q", "condition_a": "SYSA", "condition_b": "SYSA:audio_mismatched", "answer": spec,
+                       "strength": strength, "participant": [f"p{i}" for i in range(9)]})
+    per, _ = audio_mismatch_tables(pairwise_table(pw))
+    # written out as the Leaderboard's analysis sums it: wins 2 + 2*3 + 2/2, appearances 2 + 1 + 2*(3 + 1) + 2
+    assert per["leaderboard_win_rate"].iloc[0] == pytest.approx((2 + 6 + 1) / (2 + 1 + 8 + 2))
+    three = pw.assign(strength="")
+    three.loc[three["answer"] == "tie", "strength"] = ""
+    per3, _ = audio_mismatch_tables(pairwise_table(three))
+    assert per3["leaderboard_win_rate"].iloc[0] == pytest.approx((5 + 1) / 9)
+
+
 def test_no_audio_mismatch_comparisons_give_empty_tables():
     pw = _judgements()
     per, between = audio_mismatch_tables(pairwise_table(pw[pw["question"] == "realism"]))
