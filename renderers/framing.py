@@ -118,6 +118,8 @@ def make_view(position_sets, names_sets, settings: RenderSettings, parents_sets=
                 offsets = np.concatenate([np.eye(3), -np.eye(3)]) * r
                 pts.append((centres[:, None, :] + offsets[None]).reshape(-1, 3))
         roots.append(np.nanmean(pos[:, _root_index(parents)], axis=0))
+        if hasattr(body, "frame_points"):   # parts of the body well beyond its joints (the mannequin's mittens)
+            pts.append(np.asarray(body.frame_points(pos, names, parents, size), float).reshape(-1, 3))
         pts.append(pos[:, framed_mask(pos, names, parents, up, settings.framing)].reshape(-1, 3))
     floor = floor_on(settings)
     if floor and settings.framing == "full":   # the feet stand on the floor inside the picture

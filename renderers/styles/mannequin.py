@@ -77,6 +77,12 @@ def _axes(z: np.ndarray, ref: np.ndarray, alt: np.ndarray) -> np.ndarray:
     return np.stack([x, np.cross(z, x), z], axis=-2)
 
 
+def _mittens(kinds, parents) -> list[tuple[int, int]]:
+    """(wrist, its parent) of each topmost wrist joint without finger joints below it."""
+    return [(j, int(p)) for j, p in enumerate(parents) if kinds[j] == "wrist" and p >= 0 and kinds[p] != "wrist"
+            and not any(kinds[c] == "finger" for c in np.flatnonzero(descendants(parents, j)))]
+
+
 class _Parts:
     """Parts of one template: semi-axes ``r0``/``r1`` (N, 3) at their two ends, colour (3,)."""
 
@@ -172,9 +178,7 @@ class MannequinMesh:
             if len(pair[0]) and len(pair[1]):
                 trunk.append((int(pair[1][0]), int(pair[0][0]), r * s, r * s))
         # mittens on wrists without fingers (the topmost wrist joint of a chain)
-        self._mittens = [(j, int(p)) for j, p in enumerate(par) if kinds[j] == "wrist" and p >= 0
-                         and kinds[p] != "wrist" and not any(kinds[c] == "finger" for c in np.flatnonzero(
-                             descendants(par, j)))]
+        self._mittens = _mittens(kinds, par)
         body = srgb_to_linear(body_color)
         fine, coarse = _template(12, 3), _template(6, 2)
         fingers = [b for b in limbs if b[2][0] < 0.012 * s]
@@ -292,6 +296,17 @@ class MannequinStyle(BodyStyle):
     description = "a neutral body of tapered capsules with a torso, a head facing forward and hands (any skeleton)"
     floor = True       # drawn on a floor with a soft contact shadow unless the settings say otherwise
     frame_pad = 0.05   # the body's thickness beyond its joints, as a fraction of the figure size (framing)
+
+    def frame_points(self, positions: np.ndarray, names, parents, size: float) -> np.ndarray:
+        """Points ``(N, 3)`` the camera must also frame: the mitten tips (0.1 size beyond wrists without fingers)."""
+        if parents is None:
+            return np.zeros((0, 3))
+        mittens = _mittens(joint_kinds(names, parents), np.asarray(parents, dtype=np.int64))
+        if not mittens:
+            return np.zeros((0, 3))
+        pos = np.asarray(positions, float)
+        w, p = pos[:, [m[0] for m in mittens]], pos[:, [m[1] for m in mittens]]
+        return (w + 0.1 * size * _unit(w - p, np.zeros(3))).reshape(-1, 3)
 
     def mesh(self, motion: Any, settings: Any, size: float) -> MannequinMesh:
         from renderers.camera import UP_AXES
