@@ -94,3 +94,19 @@ def test_explicit_joints_must_exist(genea2023, tmp_path):
     res = CliRunner().invoke(main, ["train", "-g", "aud2pose", "--corpus", str(genea2023), "--set", "epochs=1",
                                     "--joints", "b_r_arm,b_r_forearm,RightHand", "-o", str(tmp_path / "m")])
     assert res.exit_code != 0 and "no joint(s) RightHand" in res.output
+
+
+def test_smplx_corpus_gives_smplx_output(tmp_path):
+    from evalsuite.motion.smplx import read_smplx
+    from evalsuite.motion.smplx_layout import SMPLX_JOINT_NAMES
+
+    corpus = _synth(tmp_path / "smplx", "smplx")
+    out = _train_and_generate("aud2pose", corpus, "smplx-body-hands", tmp_path)
+    assert (out / "model" / "template.npz").is_file()                # rotations only: no body model needed
+    natural = read_smplx(sorted((corpus / "tst" / "main-agent" / "bvh").glob("*.npz"))[0])
+    gen = read_smplx(sorted((out / "gen").glob("*.npz"))[0])
+    assert gen.poses.shape == natural.poses.shape and gen.fps == natural.fps
+    knee = 3 * SMPLX_JOINT_NAMES.index("left_knee")                 # not modelled: held at the template's pose
+    assert np.allclose(gen.poses[:, knee:knee + 3], gen.poses[:1, knee:knee + 3])
+    elbow = 3 * SMPLX_JOINT_NAMES.index("right_elbow")              # modelled: it moves
+    assert np.ptp(gen.poses[:, elbow:elbow + 3]) > 0

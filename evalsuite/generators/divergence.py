@@ -66,7 +66,11 @@ def loss_divergence(history: Sequence[Mapping[str, Any]], limits: DivergenceLimi
 
 
 def _spread(motion: Any, joints: Sequence[str]) -> float:
-    """mean over joints and coordinates of the std over time of the root-relative positions."""
+    """mean over joints and coordinates of the std over time of the root-relative positions (of the axis-angle
+    rotations for SMPL-X motion without a body model, whose positions cannot be computed)."""
+    smplx = getattr(motion, "smplx", None)
+    if smplx is not None and not getattr(motion, "has_positions", True):
+        return float(np.mean(np.std(np.asarray(smplx.poses, dtype=np.float64), axis=0)))
     pos = np.asarray(motion.positions(), dtype=np.float64)
     root = int(motion.skeleton.roots[0]) if motion.is_hierarchical else None
     idx = [motion.joint_index(j) for j in joints]
@@ -107,7 +111,8 @@ def output_divergence(entry: Any, corpus: Any, model_dir: pathlib.Path, config: 
         gen.close()
     if out.motion is None:
         return None
-    values = np.asarray(out.motion.positions(), dtype=np.float64)
+    smplx = getattr(out.motion, "smplx", None)
+    values = np.asarray(smplx.poses if smplx is not None else out.motion.positions(), dtype=np.float64)
     if not np.isfinite(values).all():
         return f"the generated motion of segment {segment.id!r} holds NaN or infinite values"
     ratio = scale_ratio(out.motion, natural)

@@ -29,6 +29,7 @@ import json
 import pathlib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -38,7 +39,7 @@ from evalsuite.motion.io import load_motion, save_motion
 from evalsuite.motion.joint_rotations import rotation_joints, with_rotation_vectors
 from evalsuite.motion.ops import resample
 
-__all__ = ["PoseRepresentation", "KINDS", "MODEL_FPS", "modelled_joints"]
+__all__ = ["PoseRepresentation", "KINDS", "MODEL_FPS", "modelled_joints", "as_smplx_result"]
 
 KINDS = ("expmap", "rotmat", "positions")
 MODEL_FPS = 20.0   # the frame rate of all four seed papers' models
@@ -170,9 +171,19 @@ class PoseRepresentation:
 
     # -- files ---------------------------------------------------------------------------------------------
     def save(self, folder: pathlib.Path) -> None:
+        """``representation.json`` and the template: ``template.bvh``, or ``template.npz`` for an SMPL-X corpus
+        (its rotations; no body model is needed)."""
+        smplx = getattr(self.template, "smplx", None)
+        name = "template.npz" if smplx is not None else "template.bvh"
         (folder / "representation.json").write_text(json.dumps(
-            {"kind": self.kind, "joints": self.joints, "fps": self.fps}, indent=1), encoding="utf-8")
-        save_motion(self.template, folder / "template.bvh")
+            {"kind": self.kind, "joints": self.joints, "fps": self.fps, "template": name}, indent=1),
+            encoding="utf-8")
+        if smplx is not None:
+            from evalsuite.motion.smplx import write_smplx
+
+            write_smplx(folder / name, smplx)
+        else:
+            save_motion(self.template, folder / name)
 
     @classmethod
     def load(cls, folder: pathlib.Path) -> PoseRepresentation:
@@ -181,4 +192,24 @@ class PoseRepresentation:
         except (OSError, ValueError) as exc:
             raise InputError(f"not a model folder of a re-implemented generator ({exc})", path=folder,
                              field="--model") from None
-        return cls(meta["kind"], list(meta["joints"]), float(meta["fps"]), load_motion(folder / "template.bvh"))
+        return cls(meta["kind"], list(meta["joints"]), float(meta["fps"]),
+                   load_motion(folder / str(meta.get("template", "template.bvh"))))
+
+
+def as_smplx_result(result: Any, req: Any) -> Any:
+    """A result whose motion is SMPL-X rotations (a model trained on an SMPL-X corpus) as SMPL-X output
+    (:attr:`GenerationResult.smplx`): resampled to the request's rate and fitted to its frames (the last frame
+    held, or the tail cut); any other result unchanged."""
+    from evalsuite.generators.contract import GenerationResult
+    from evalsuite.motion.smplx_motion import SmplxMotion
+
+    motion = getattr(result, "motion", None)
+    if not isinstance(motion, SmplxMotion):
+        return result
+    m = resample(motion, req.fps) if abs(motion.fps - req.fps) > 1e-9 else motion
+    values = np.asarray(m.values)[:req.n_frames]
+    if len(values) < req.n_frames:
+        values = np.concatenate([values, np.repeat(values[-1:], req.n_frames - len(values), axis=0)])
+    fitted = m.with_values(values, fps=req.fps)
+    assert isinstance(fitted, SmplxMotion)
+    return GenerationResult(None, dict(result.meta), smplx=fitted.smplx)

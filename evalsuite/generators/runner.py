@@ -25,6 +25,7 @@ import numpy as np
 from evalsuite.errors import InputError
 from evalsuite.generators.contract import GenerationRequest, Generator, GeneratorError
 from evalsuite.generators.device import GPU_TOLERANCE, current_device
+from evalsuite.generators.pose_repr import as_smplx_result
 from evalsuite.generators.presets import model_preset
 from evalsuite.generators.provenance import describe_inputs, model_sha256, package_versions
 from evalsuite.generators.registry import GeneratorEntry, generator_class
@@ -113,6 +114,7 @@ class _Task:
 
     def write(self, gen: Generator, req: GenerationRequest, result: Any, seconds: float) -> dict[str, Any]:
         notes: list[dict[str, Any]] = []
+        result = as_smplx_result(result, req)           # a model of SMPL-X rotations writes SMPL-X .npz
         if getattr(result, "smplx", None) is not None:  # an SMPL-X source gives SMPL-X output
             data = conform_smplx(gen.spec, req, result.smplx, bool(self.post))
             path = pathlib.Path(self.out_dir) / (_file_name(req, self.samples, None))
