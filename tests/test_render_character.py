@@ -276,16 +276,18 @@ def test_the_shipped_character_follows_extreme_poses_of_a_real_bvh():
     assert mesh.map_name == "classic"
     for name, ratio in ring_ratios(mesh, P[frames]).items():
         assert ratio.min() >= 0.75 and ratio.max() <= 1.25, (name, ratio.min(), ratio.max())
-    # the posed mapped joints sit where the motion puts them (directions exact, lengths the character's)
-    R, pos = mesh.rig.pose(P[frames])
-    for cj, mj in mesh.rig.mapping.items():
-        if cj in mesh.rig.segment:
-            e = mesh.rig.segment[cj][0]
-            d_motion = P[frames][:, mesh.rig.mapping[e]] - P[frames][:, mj]
-            d_char = pos[:, e] - pos[:, cj]
-            cos = np.einsum("fi,fi->f", d_motion, d_char) / np.linalg.norm(d_motion, axis=-1) / np.linalg.norm(
-                d_char, axis=-1)
-            assert np.all(cos > 0.9999)
+    # every posed bone points where the motion's does; the limbs also have the motion's lengths
+    _, pos = mesh.rig.pose(P[frames])
+    for cj, (e, _) in mesh.rig.segment.items():
+        d_motion = P[frames][:, mesh.rig.mapping[e]] - P[frames][:, mesh.rig.mapping[cj]]
+        d_char = pos[:, e] - pos[:, cj]
+        cos = np.einsum("fi,fi->f", d_motion, d_char) / np.linalg.norm(d_motion, axis=-1) / np.linalg.norm(
+            d_char, axis=-1)
+        assert np.all(cos > 0.9999), mesh.rig.names[cj]
+        if cj in mesh.rig.limbs:
+            assert np.allclose(np.linalg.norm(d_char, axis=-1), np.linalg.norm(d_motion, axis=-1), rtol=1e-6)
+    assert {mesh.rig.names[j] for j in mesh.rig.limbs} == {f"{s}{b}" for s in ("Left", "Right")
+                                                          for b in ("Arm", "ForeArm", "UpLeg", "Leg")}
     for img in render_frames(motions, settings, frames=frames[:2]):
         _silhouette_checks(img)
 
@@ -314,3 +316,36 @@ def test_a_motion_in_the_characters_rest_pose_leaves_the_mesh_as_modelled():
     verts, norms = mesh.vertices(rest)
     assert np.allclose(verts, character.vertices * 100.0 + [5.0, 0.0, -3.0], atol=1e-3)
     assert np.allclose(norms, character.normals, atol=1e-4)
+
+
+@pytest.mark.parametrize("framing", ["full", "above-knees", "upper"])
+def test_four_inputs_are_drawn_centred_with_visible_hands(tmp_path, monkeypatch, framing):
+    """GENEA 2023 and BEAT-style BVH, an SMPL-X recording and a positions file (body_helpers' stand-ins)."""
+    from body_helpers import four_inputs
+
+    from renderers.render import view_for
+    from renderers.styles.bones import joint_kinds
+
+    for name, path in four_inputs(tmp_path, monkeypatch).items():
+        settings = RenderSettings(width=160, height=120, body="character", framing=framing, msaa=0)
+        ms = prepare_motions([path], settings)
+        view = view_for(ms, settings)
+        img = render_frames(ms, settings, view=view)[0]
+        sil = np.any(np.abs(img.astype(int) - 255) > 12, axis=2)
+        assert 0.05 < sil.mean() < 0.5, f"{name} {framing}: silhouette covers {sil.mean():.3f} of the picture"
+        cx = np.nonzero(sil)[1].mean() / 160
+        assert abs(cx - 0.5) < 0.05, f"{name} {framing}: silhouette centroid at {cx:.3f} of the width"
+        assert not sil[:, :2].any() and not sil[:, -2:].any(), f"{name} {framing}: clipped at a side"
+        # the character's own wrists (its proportions, the motion's limb lengths) are in the picture and drawn,
+        # and near the motion's wrists (within a tenth of the picture's height)
+        m = ms[0]
+        mesh = STYLES["character"].mesh(m, settings, view.size)
+        _, pos = mesh.rig.pose(m.positions()[:1])
+        wrists = [mesh.rig.names.index(n) for n in ("LeftHand", "RightHand")]
+        uv = view.camera.project(pos[0, wrists])
+        hit = [sil[max(int(v) - 2, 0):int(v) + 3, max(int(u) - 2, 0):int(u) + 3].any() for u, v in uv]
+        assert all(hit), f"{name} {framing}: a hand is not drawn"
+        motion_wrists = [j for j, k in enumerate(joint_kinds(m.joint_names, m.parents)) if k == "wrist"]
+        target = view.camera.project(m.positions()[0, motion_wrists])
+        gap = min(np.linalg.norm(uv - target, axis=-1).max(), np.linalg.norm(uv - target[::-1], axis=-1).max())
+        assert len(motion_wrists) == 2 and gap < 12, f"{name} {framing}: a hand is {gap:.1f} px from its wrist"

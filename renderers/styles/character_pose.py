@@ -17,11 +17,14 @@ character's bind direction ``d0 = b_e - b_m`` to the motion's ``d = P_e - P_m``:
   half of the twist between the two about its own axis, as the forearm's bones do, so the wrist ring of
   vertices is not pinched (candy-wrapping).
 
-Unmapped joints off any segment keep their parent's rotation. Joint positions are rebuilt from the character's
-bones scaled by ``scale`` (motion bone length / character bone length, summed over segments):
-``p_j = p_parent + scale * R_parent (b_j - b_parent)``, the topmost mapped joint placed at the motion's.
-Skinning: ``M_j = [scale R_j | p_j - scale R_j b_j]``, ``v' = sum_j W_vj M_j [v; 1]``, normals by the blended
-rotation part, renormalised.
+Unmapped joints off any segment keep their parent's rotation. The character is scaled by ``scale`` (motion
+bone length / character bone length, summed over segments), and each segment is stretched along its motion
+direction by ``k = |d| / (scale |d0|)`` (clipped to 0.5-2), so ``A_j = (I + (k - 1) u u^T) R_j`` with
+``u = d / |d|``, for the limbs only (upper arm, forearm, thigh, shin: their lengths place the hands and feet;
+stretching the trunk creases the mesh where differently stretched bones meet). Joint positions follow the
+bones, ``p_j = p_parent + scale * A_parent (b_j - b_parent)``, the topmost mapped joint placed at the motion's.
+Skinning: ``M_j = [scale A_j | p_j - scale A_j b_j]``, ``v' = sum_j W_vj M_j [v; 1]``, normals by the blended
+linear part, renormalised.
 """
 from __future__ import annotations
 
@@ -143,6 +146,9 @@ class CharacterRig:
                        and self.segment[m][0] in self.segment and m not in self.sides}
         self.splits = {m for m, (e, path) in self.segment.items() if e in self.sides and m not in self.sides
                        and m not in self.hinges and all(len(children[q]) == 1 for q in path)}
+        # the limbs take the motion's lengths (upper arm, forearm, thigh, shin); the trunk, hands and feet keep
+        # the character's proportions (stretching them creases the mesh where differently stretched bones meet)
+        self.limbs = self.hinges | {self.segment[h][0] for h in self.hinges if self.segment[h][0] in self.segment}
         mapped = sorted(self.mapping, key=self._depth)
         self.anchor = mapped[0]
         self.scale = 1.0
@@ -180,7 +186,8 @@ class CharacterRig:
         return self.scale
 
     def pose(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World rotations ``(F, J, 3, 3)`` and positions ``(F, J, 3)`` for motion positions ``(F, Jm, 3)``."""
+        """Linear parts ``(F, J, 3, 3)`` (rotation, times the segment's stretch) and positions ``(F, J, 3)`` of the
+        joints for motion positions ``(F, Jm, 3)``."""
         P = np.nan_to_num(np.asarray(positions, dtype=np.float64))
         f, n = len(P), len(self.names)
         R = np.repeat(np.repeat(np.eye(3)[None, None], f, axis=0), n, axis=1)
@@ -214,15 +221,26 @@ class CharacterRig:
                              else np.array([1.0, 0.0, 0.0]))
             phi = twist_angle(axis, R[:, m] @ probe, R[:, e] @ probe)
             R[:, path] = (axis_angle(axis, 0.5 * phi) @ R[:, m])[:, None]
+        # stretch each limb segment along its motion direction to the motion's length
+        A = R.copy()
+        for m in self.limbs:
+            e, path = self.segment[m]
+            d = P[:, self.mapping[e]] - P[:, self.mapping[m]]
+            length = np.linalg.norm(d, axis=-1)
+            k = np.clip(length / max(self.scale * float(np.linalg.norm(self.bind[e] - self.bind[m])), 1e-12),
+                        0.5, 2.0)
+            u = _unit(d)
+            stretch = np.eye(3) + (k - 1.0)[:, None, None] * u[:, :, None] * u[:, None, :]
+            A[:, path] = (stretch @ R[:, m])[:, None]
         pos = np.zeros((f, n, 3))
         s = self.scale
         for j in self.order:
             p = self.parents[j]
             if p >= 0:
-                pos[:, j] = pos[:, p] + s * (R[:, p] @ (self.bind[j] - self.bind[p]))
+                pos[:, j] = pos[:, p] + s * (A[:, p] @ (self.bind[j] - self.bind[p]))
         # place the whole figure so the anchor joint lands where the motion has it
-        shift = P[:, self.mapping[self.anchor]] - pos[:, self.anchor]
-        return R, pos + shift[:, None]
+        pos += (P[:, self.mapping[self.anchor]] - pos[:, self.anchor])[:, None]
+        return A, pos
 
     def _hinge(self, m, e, d0, d, P, Rj):
         f_end = self.segment[e][0]
@@ -243,8 +261,9 @@ def skin(weights: np.ndarray, vertices: np.ndarray, normals: np.ndarray, bind: n
          pos: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
     """Linear blend skinning: vertices and normals ``(F, V, 3)`` float32.
 
-    ``weights (V, J)`` dense, ``vertices``/``normals (V, 3)`` in the bind pose, ``bind (J, 3)``, ``R (F, J, 3, 3)``,
-    ``pos (F, J, 3)``: ``M_j = [s R_j | p_j - s R_j b_j]``, ``v' = sum_j W_vj M_j [v; 1]``."""
+    ``weights (V, J)`` dense, ``vertices``/``normals (V, 3)`` in the bind pose, ``bind (J, 3)``, ``R (F, J, 3, 3)``
+    the joints' linear parts (rotation, possibly stretched), ``pos (F, J, 3)``: ``M_j = [s R_j | p_j - s R_j b_j]``,
+    ``v' = sum_j W_vj M_j [v; 1]``."""
     f, n = R.shape[:2]
     M = np.empty((f, n, 3, 4), dtype=np.float32)
     M[..., :3] = scale * R
