@@ -116,6 +116,7 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
             raise InputError("character file not found", path=settings.character, field="render.character")
         character = file_sha256(settings.character)
     render_jobs, by_pair = [], {}
+    embodiment = embodiment_of(settings)
     for seg, opts in cfg["segments"].items():
         paths = {c: _resolve(cfg["base"], cfg["conditions"][c], seg) for c in conds}
         for c, p in paths.items():
@@ -132,7 +133,7 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
             spec = {"kind": "render", "file": file, "out": str(out / file), "condition": c, "segment": seg,
                     "motion": str(paths[c]), "audio": str(audio) if audio else None,
                     "start": opts["start"], "end": opts["end"], "settings": settings.to_dict(), "view": view,
-                    "bitrate": bitrate}
+                    "bitrate": bitrate, "embodiment": embodiment}
             spec["input_hash"] = _hash({"v": RENDERER_VERSION, "motion": file_sha256(paths[c]), "audio": audio_hash,
                                         **({"character": character} if character else {}),
                                         "settings": spec["settings"], "view": view, "start": spec["start"],
@@ -147,7 +148,8 @@ def plan(cfg: dict) -> tuple[list[dict], list[dict]]:
         spec = {"kind": "attention", "file": file, "out": str(out / file), "src": src["out"],
                 "source_file": src["file"], "condition": chk["condition"], "segment": chk["segment"],
                 "check": chk["check"], "text": chk["text"], "expected": chk["expected"],
-                "appear_s": chk["appear_s"], "seed": chk["index"], "crf": settings.crf, "bitrate": bitrate}
+                "appear_s": chk["appear_s"], "seed": chk["index"], "crf": settings.crf, "bitrate": bitrate,
+                "embodiment": embodiment}
         spec["input_hash"] = _hash({"v": RENDERER_VERSION, "src": src["input_hash"], "check": chk["check"],
                                     "text": chk["text"], "appear_s": chk["appear_s"], "seed": chk["index"],
                                     **({"bitrate": bitrate} if bitrate else {})})
@@ -211,7 +213,13 @@ def _row(spec: dict, info: dict) -> dict:
             "appear_s": "" if info.get("appear_s") is None else f"{info['appear_s']:.3f}",
             "duration_s": f"{float(info['duration']):.4f}", "n_frames": int(info["n_frames"]),
             "fps": f"{float(info['fps']):g}", "width": int(info["width"]), "height": int(info["height"]),
-            "input_hash": spec["input_hash"]}
+            "input_hash": spec["input_hash"], **spec["embodiment"]}
+
+
+def embodiment_of(settings) -> dict[str, str]:
+    """The manifest's embodiment columns (contracts.manifest.EMBODIMENT) for clips rendered with ``settings``."""
+    character = pathlib.Path(settings.character).name if settings.body == "character" and settings.character else ""
+    return {"style": settings.body, "character": character, "framing": settings.framing, "face": settings.face}
 
 
 def write_manifest(path, rows: list[dict]) -> None:
@@ -246,7 +254,7 @@ def build_stimuli(config, *, jobs: int = 1, dask_address: str | None = None, for
         todo = []
         for s in specs:
             if _up_to_date(s, old):
-                rows[s["file"]] = old[s["file"]]
+                rows[s["file"]] = {**old[s["file"]], **s["embodiment"]}   # (a manifest from before the columns)
                 skipped += 1
             else:
                 todo.append(s)

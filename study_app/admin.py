@@ -24,6 +24,7 @@ from flask import (
 
 from study_app.adaptive import adaptive_status
 from study_app.context import get_store, get_study
+from study_app.embodiment import describe_embodiment
 from study_app.errors import StudyStateError
 from study_app.export import raw_json_chunks, result_rows, results_csv
 from study_app.monitor import answer_count, participant_rows, plan_counts, status_counts, unplayable_reports
@@ -103,7 +104,8 @@ def overview():
                            participants=participant_rows(store, study, now),
                            reports=unplayable_reports(store, study), refresh_seconds=_refresh_seconds(),
                            pilot=pilot_mode(store, study), messages=get_flashed_messages(with_categories=True),
-                           adaptive=adaptive_status(store, study))
+                           adaptive=adaptive_status(store, study),
+                           embodiment=describe_embodiment(study.manifest.embodiment))
 
 
 def _refresh_seconds() -> int:

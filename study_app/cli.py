@@ -157,6 +157,7 @@ def serve(study_file, db, instance, host, port, admin_token, secret_key, secure_
 def export(study_file, db, instance, out, raw, pseudonymise, key, include_pilot, include_excluded):
     """Export the answers of STUDY_FILE to results.csv (and raw JSON), without pilot and excluded sessions."""
     from study_app.definition import load_study
+    from study_app.embodiment import describe_embodiment
     from study_app.export import raw_json_chunks, result_rows, results_csv
     from study_app.operations import export_dump, pseudonym_key
     from study_app.storage import Base, Store, make_engine
@@ -170,6 +171,7 @@ def export(study_file, db, instance, out, raw, pseudonymise, key, include_pilot,
                        pseudonym_key=pseudonym_key(key) if pseudonymise else None)
     pathlib.Path(out).write_text(results_csv(st, dump))
     click.echo(f"{len(result_rows(st, dump))} judgements from {len(dump['sessions'])} sessions -> {out}")
+    click.echo(f"stimuli: {describe_embodiment(st.manifest.embodiment)}")
     if raw:
         with open(raw, "w", encoding="utf-8") as fh:
             fh.writelines(raw_json_chunks(st, dump))

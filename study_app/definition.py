@@ -15,6 +15,7 @@ import hashlib
 import pathlib
 import re
 
+from study_app.embodiment import embodiment_columns
 from study_app.errors import StudyDefinitionError
 from study_app.model import MANIFEST_KINDS, MANIFEST_REQUIRED, PLATFORMS, Manifest, Page, Stimulus, Study
 from study_app.outcomes import load_outcomes
@@ -113,7 +114,8 @@ def load_manifest(path) -> Manifest:
             raise StudyDefinitionError(
                 f"file name {s.file!r} contains the condition name {leaked!r}; expected blinded "
                 "file names (participants see them)", path=path, line=s.line, field="file")
-    return Manifest(path=path, root=root, stimuli=stimuli, sha256=hashlib.sha256(raw).hexdigest())
+    return Manifest(path=path, root=root, stimuli=stimuli, sha256=hashlib.sha256(raw).hexdigest(),
+                    embodiment=embodiment_columns(csv.DictReader(text.splitlines())))
 
 
 def _duration(text: str, path, lineno) -> float | None:

@@ -109,6 +109,7 @@ def raw_json_chunks(study: Study, dump: dict) -> Iterator[str]:
     by_id = {s.id: s for s in dump["sessions"]}
     head = {
         "study": study.id,
+        "embodiment": study.manifest.embodiment,
         "sessions": [sess(s) for s in dump["sessions"]],
         "answers": [{"session": a.session_id, "page_index": a.page_index, "page": a.page_id,
                      "submit_token": a.submit_token, "data": a.data,

@@ -65,6 +65,8 @@ class Manifest:
     sha256: str
     # file -> clip made by `study build` (audio-mismatched and video-only variants; study_app.derived)
     derived: dict[str, DerivedClip] = field(default_factory=dict)
+    # embodiment column -> its distinct values over the rows that have it (contracts.manifest.EMBODIMENT)
+    embodiment: dict[str, list[str]] = field(default_factory=dict)
 
     def by_file(self) -> dict[str, Stimulus]:
         """Every clip a plan can name: the manifest's rows and the derived clips."""

@@ -7,12 +7,15 @@ time on a page against it). A hand-made manifest needs only the required ones.
 """
 from __future__ import annotations
 
-__all__ = ["COLUMNS", "REQUIRED", "KINDS", "AUDIO_CHECKS"]
+__all__ = ["COLUMNS", "REQUIRED", "KINDS", "AUDIO_CHECKS", "EMBODIMENT"]
 
 # In the order the renderer writes them.
 COLUMNS = ("file", "condition", "segment", "kind", "expected", "sha256", "check", "source_file",
            "motion_segment", "text", "appear_s", "duration_s", "n_frames", "fps", "width", "height",
-           "input_hash")
+           "input_hash", "style", "character", "framing", "face")
+# How the stimuli show the motion (the render settings' body style, character file name, framing and face), so a
+# paper can report the embodiment; the study app shows them on the admin page and in the raw export.
+EMBODIMENT = ("style", "character", "framing", "face")
 REQUIRED = ("file", "condition", "segment")
 # Row kinds: a stimulus of a condition, or an attention-check video (``expected``: the attentive answer).
 KINDS = ("stimulus", "attention")
