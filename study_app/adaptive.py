@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 from scipy.stats import norm
-from sqlalchemy import select
+from sqlalchemy import func, select
 
 from evalsuite.analysis.ranking import bradley_terry
 
@@ -67,19 +67,21 @@ class Separation:
 
 
 def fit(conditions, outcomes, prior: float = PRIOR) -> Estimate:
-    """Bradley-Terry fit of ``outcomes`` = ``[(a, b, s), ...]`` (``s``: 1 a preferred, 0 b, 0.5 a tie) over
-    ``conditions`` (``C`` names): strengths ``(C,)`` and their covariance ``(C, C)`` (module docstring)."""
+    """Bradley-Terry fit of ``outcomes`` = ``[(a, b, s), ...]`` (``s``: 1 a preferred, 0 b, 0.5 a tie; an optional
+    4th item counts the judgements alike) over ``conditions`` (``C`` names): strengths ``(C,)`` and their
+    covariance ``(C, C)`` (module docstring)."""
     conditions = tuple(conditions)
     idx = {c: i for i, c in enumerate(conditions)}
     C = len(conditions)
     W = np.full((C, C), prior / 2)
     np.fill_diagonal(W, 0.0)
     votes = 0.0
-    for a, b, s in outcomes:
+    for a, b, s, *count in outcomes:
+        n = count[0] if count else 1
         if a in idx and b in idx and a != b:
-            W[idx[a], idx[b]] += s
-            W[idx[b], idx[a]] += 1 - s
-            votes += 1
+            W[idx[a], idx[b]] += n * s
+            W[idx[b], idx[a]] += n * (1 - s)
+            votes += n
     theta = np.asarray(bradley_terry(W, prior=0.0)) * np.log(10)
     p = 1 / (1 + np.exp(-(theta[:, None] - theta[None, :])))
     w = (W + W.T) * p * (1 - p)
@@ -148,13 +150,16 @@ def adaptive_record(spec: dict, by_file: dict, side: str) -> dict:
 
 
 def block_estimate(db, study, block_id: str) -> Estimate:
-    """The estimate of one adaptive block from its stored answers (sessions that failed left out)."""
+    """The estimate of one adaptive block from its stored answers (sessions that failed left out), counted
+    in SQL: one row per (A, B, outcome) from the answers' ``adaptive`` record."""
     from study_app.storage.tables import Answer, ParticipantSession  # (the storage package imports the pages)
-    rows = db.scalars(select(Answer.data).join(ParticipantSession, Answer.session_id == ParticipantSession.id)
+    rec = Answer.data["adaptive"]
+    a, b, s = rec["a"].as_string(), rec["b"].as_string(), rec["s"].as_float()
+    rows = db.execute(select(a, b, s, func.count()).join(ParticipantSession, Answer.session_id == ParticipantSession.id)
                       .where(ParticipantSession.study == study.id, ParticipantSession.status != "failed",
-                             Answer.page_id.like(f"{block_id}-%")))
-    outcomes = [(r["adaptive"]["a"], r["adaptive"]["b"], r["adaptive"]["s"]) for r in rows
-                if isinstance(r, dict) and isinstance(r.get("adaptive"), dict)]
+                             Answer.page_id.like(f"{block_id}-%"), a.is_not(None))
+                      .group_by(a, b, s))
+    outcomes = [(x, y, float(v), int(n)) for x, y, v, n in rows if x and y and v is not None]
     return fit(study.page(block_id).cfg["conditions"], outcomes)
 
 

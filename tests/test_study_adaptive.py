@@ -123,9 +123,9 @@ ADAPTIVE_YAML = h.STUDY_YAML.split("  - type: questionnaire")[0].replace(
 TRUTH = {"NATURALGT": 2.0, "SYSALPHA": 0.0, "SYSBETA": -2.0}
 
 
-def _app(tmp_path, exploration=0.2, sessions=12):
+def _app(tmp_path, exploration=0.2, sessions=12, url=None):
     path = h.make_study(tmp_path, yaml_text=ADAPTIVE_YAML.format(sessions=sessions, exploration=exploration))
-    return create_app({"STUDY": str(path), "DATABASE_URL": f"sqlite:///{tmp_path / 'a.db'}", "SECRET_KEY": h.SECRET,
+    return create_app({"STUDY": str(path), "DATABASE_URL": url or f"sqlite:///{tmp_path / 'a.db'}", "SECRET_KEY": h.SECRET,
                        "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False, "INSTANCE_PATH": str(tmp_path / "i")})
 
 
@@ -169,8 +169,9 @@ def test_definition_options_are_checked(tmp_path):
         load_study(tmp_path / "mm.yaml")
 
 
-def test_an_adaptive_block_chooses_each_pair_at_the_first_view_and_learns_the_ranking(tmp_path):
-    app = _app(tmp_path, exploration=0.2, sessions=12)
+def test_an_adaptive_block_chooses_each_pair_at_the_first_view_and_learns_the_ranking(tmp_path, db_url):
+    """On SQLite and PostgreSQL (the estimate reads the answers' JSON in SQL)."""
+    app = _app(tmp_path, exploration=0.2, sessions=12, url=db_url)
     study, store = study_of(app), store_of(app)
     rng = np.random.default_rng(11)
     chosen = Counter()
@@ -226,8 +227,8 @@ def test_without_exploration_the_most_informative_pair_is_shown_and_kept(tmp_pat
     assert h.plan_pages(app, p.sid)[data["index"]] == spec
 
 
-def test_concurrent_views_of_one_page_store_one_choice(tmp_path):
-    app = _app(tmp_path, exploration=1.0, sessions=2)
+def test_concurrent_views_of_one_page_store_one_choice(tmp_path, db_url):
+    app = _app(tmp_path, exploration=1.0, sessions=2, url=db_url)
     study, store = study_of(app), store_of(app)
     p = h.Participant(app.test_client(), h.valid_pid("racer0001"))
     assert p.enter().status_code == 302
