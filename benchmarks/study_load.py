@@ -97,6 +97,7 @@ class Client:
         self.acked = []        # (sid, page index, token, answer, status)
         self.sid = None
         self.retries = 0
+        self.retry_reasons = collections.Counter()       # "<kind> <status or exception>" -> count
 
     def request(self, kind, url, body=None, headers=None):
         """Send until the server answers (not 5xx) or the deadline passes."""
@@ -114,12 +115,14 @@ class Client:
                     location = resp.headers.get("Location")
             except urllib.error.HTTPError as exc:
                 code, payload, location = exc.code, exc.read(), exc.headers.get("Location")
-            except (urllib.error.URLError, ConnectionError, OSError, http.client.HTTPException):
+            except (urllib.error.URLError, ConnectionError, OSError, http.client.HTTPException) as exc:
                 code, payload, location = None, b"", None
+                failure = type(getattr(exc, "reason", exc)).__name__
             if code is not None and code < 500:
                 self.stats[kind].append(time.perf_counter() - t0)
                 return code, payload, location
             self.retries += 1
+            self.retry_reasons[f"{kind} {code if code is not None else failure}"] += 1
             if time.time() > self.deadline:
                 raise TimeoutError(f"{self.pid}: server unreachable for too long")
             time.sleep(backoff)
@@ -276,6 +279,7 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
     lat = {f"{kind}_p{q}": pct(stats[kind], q) for kind in ("enter", "page", "answer", "video") for q in (50, 95, 99)}
     return {"name": name, "participants": participants, "wall_s": wall, "finished": finished, "errors": errors,
             "crash": crash, "retries": sum(c.retries for c in clients), "server_cpu_s": server_cpu,
+            "retry_reasons": sum((c.retry_reasons for c in clients), collections.Counter()),
             "client_cpu_s": client_cpu,
             "answers_per_s": check["acknowledged"] / wall, **lat, **check}
 
@@ -316,6 +320,8 @@ def report(r):
     print(f"\n== {r['name']} ==")
     print(f"participants finished: {r['finished']}   wall time: {r['wall_s']:.1f} s   "
           f"answers/s: {r['answers_per_s']:.0f}   client retries: {r['retries']}")
+    if r["retries"]:
+        print("client retries by request and answer: " + ", ".join(f"{k}: {n}" for k, n in r["retry_reasons"].most_common()))
     print(f"CPU: gunicorn + nginx {r['server_cpu_s']:.1f} s ({1000 * r['server_cpu_s'] / max(r['acknowledged'], 1):.0f} ms "
           f"per answer with its page and videos, {r['server_cpu_s'] / r['wall_s']:.2f} cores on average), simulated "
           f"browsers {r['client_cpu_s']:.1f} s; load average now {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
