@@ -41,7 +41,7 @@ def env(tmp_path):
     db = f"sqlite:///{tmp_path / 'study.db'}"
     server = Server(lambda: create_app({"STUDY": str(path), "DATABASE_URL": db, "SECRET_KEY": h.SECRET,
                                         "ADMIN_TOKEN": h.ADMIN, "SESSION_COOKIE_SECURE": False,
-                                        "INSTANCE_PATH": str(tmp_path / "inst")}))
+                                        "INSTANCE_PATH": str(tmp_path / "inst"), "ADMIN_REFRESH_SECONDS": 1}))
     shots = tmp_path / "screens"
     shots.mkdir()
     from playwright.sync_api import sync_playwright
@@ -57,6 +57,12 @@ def test_adaptive_study_in_chromium(env):
     study, store = study_of(app), store_of(app)
     by_file = study.manifest.by_file()
     shown = {}
+    # the researcher watches the admin page while participants answer (Bearer token on every request)
+    admin = env.browser.new_context(extra_http_headers={"Authorization": f"Bearer {h.ADMIN}"})
+    board = admin.new_page()
+    board.goto(env.server.url + "/admin/")
+    assert board.locator("#adaptive tbody tr").count() == 1
+    assert board.text_content("#adaptive tbody td:nth-child(2)") == "0"
     for pid in ("5f3a1c9e8b7d6a5f4e3d2c01", "5f3a1c9e8b7d6a5f4e3d2c02", "5f3a1c9e8b7d6a5f4e3d2c03"):
         d = Driver(env, pid)
         d.enter()
@@ -69,6 +75,10 @@ def test_adaptive_study_in_chromium(env):
         assert "DONE1234" in d.page.content()
         d.context.close()
     assert len(shown) == 9
+    # the table refreshed by itself (status.json every second) to every vote, without a reload
+    board.wait_for_function("document.querySelector('#adaptive tbody td:nth-child(2)').textContent === '9'")
+    assert " > " in board.text_content("#adaptive tbody td:nth-child(3)")
+    admin.close()
     # the browser was sent every byte of exactly the chosen files, in the sides the plan says
     with store.ReadSession() as db:
         served = {(r.session_id, r.page_index, r.slot): r.total for r in db.query(MediaServed)}

@@ -1,4 +1,5 @@
-// The admin page refreshes its session and answer counts, plan counts, participant table and "does not play" reports by itself,
+// The admin page refreshes its session and answer counts, plan counts, participant table, "does not play" reports and the
+// adaptive pair selection table by itself,
 // polling status.json (same admin login) every data-refresh seconds.
 (function () {
   "use strict";
@@ -41,6 +42,12 @@
     fill(document.querySelector("#reports tbody"), s.reports, function (r) {
       return [cell(r.file), cell(r.condition), cell(r.segment), cell(r.kind), cell(r.reports, true),
               cell(r.participants, true), cell(r.pages), cell(r.last_reported_at)];
+    });
+    var adaptive = document.querySelector("#adaptive tbody");
+    if (adaptive && s.adaptive) fill(adaptive, s.adaptive, function (a) {
+      var order = a.order.map(function (c, i) { return c + " (" + a.elo[i] + ")"; }).join(" > ");
+      return [cell(a.block), cell(a.votes, true), cell(order),
+              cell(a.separated + " of " + a.neighbours + (a.done ? ": separated, the study may stop" : ""))];
     });
     note.textContent = "Updated " + s.generated_at + "; refreshes every " + seconds + " s.";
     note.removeAttribute("data-kind");
