@@ -349,3 +349,33 @@ def test_four_inputs_are_drawn_centred_with_visible_hands(tmp_path, monkeypatch,
         target = view.camera.project(m.positions()[0, motion_wrists])
         gap = min(np.linalg.norm(uv - target, axis=-1).max(), np.linalg.norm(uv - target[::-1], axis=-1).max())
         assert len(motion_wrists) == 2 and gap < 12, f"{name} {framing}: a hand is {gap:.1f} px from its wrist"
+
+
+def test_a_blank_face_is_a_smooth_white_mask():
+    """face="blank" (the GENEA Leaderboard's face mask): the nose and lips are pulled back onto the head's
+    ellipsoid and coloured as the mask; nothing else of the body changes."""
+    from renderers.figure import srgb_to_linear
+    from renderers.styles.character import MASK_COLOR, SKIN_COLOR
+
+    character = load_character()
+    names = ["Hips", "Spine", "Spine1", "Spine2", "Neck", "Head", "LeftShoulder", "LeftArm", "RightShoulder",
+             "RightArm"]
+    rest = np.array([character.bind_positions[character.joint_names.index(n)] for n in names])[None] * 100.0
+    visible = CharacterMesh(character, names, rest)
+    blank = CharacterMesh(character, names, rest, face="blank")
+    v_vis, _ = visible.vertices(rest)
+    v_blank, n_blank = blank.vertices(rest)
+    forward = blank.rig.forward
+    head = character.joint_names.index("Head")
+    dominant = character.joints[np.arange(len(character.vertices)), np.argmax(character.weights, axis=1)]
+    on_head = np.flatnonzero(dominant == head)
+    nose = on_head[np.argmax(character.vertices[on_head] @ forward)]      # the head's frontmost vertex
+    assert (v_vis[0, nose] - v_blank[0, nose]) @ forward > 0.5    # cm: pulled back
+    moved = np.linalg.norm(v_vis[0] - v_blank[0], axis=-1) > 1e-4
+    assert moved.any() and np.all(dominant[moved] == head)
+    assert np.allclose(blank.colors[nose], srgb_to_linear(MASK_COLOR), atol=1e-5)
+    off_head = np.ones(len(moved), dtype=bool)
+    off_head[on_head] = False
+    assert np.allclose(blank.colors[off_head], srgb_to_linear(SKIN_COLOR), atol=1e-5)
+    assert np.allclose(visible.colors, srgb_to_linear(SKIN_COLOR), atol=1e-5)
+    assert np.allclose(np.linalg.norm(n_blank, axis=-1), 1.0, atol=1e-4)
