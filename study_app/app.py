@@ -33,7 +33,8 @@ def create_app(config: dict) -> Flask:
     default True), ``TRUSTED_PROXIES`` (reverse proxies in front of the server whose ``X-Forwarded-For``
     gives the client address, default 0) and ``TRUSTED_PROXY_ADDRESSES`` (the addresses or networks those
     proxies connect from, a list or comma-separated; default ``127.0.0.1, ::1``: the header is believed only
-    from them). Anything else is passed to ``app.config``.
+    from them), ``MEDIA_SERVER`` (``app``, the default, or ``nginx``) and ``MEDIA_ACCESS_LOG`` (nginx's media
+    log), checked by :mod:`study_app.media`. Anything else is passed to ``app.config``.
     """
     config = dict(config)
     for key in ("SECRET_KEY", "ADMIN_TOKEN"):
@@ -141,7 +142,8 @@ def create_app_from_env() -> Flask:
     Reads ``EVALSUITE_STUDY``, ``EVALSUITE_DATABASE_URL``, ``EVALSUITE_SECRET_KEY``,
     ``EVALSUITE_ADMIN_TOKEN`` and optionally ``EVALSUITE_PLANS``, ``EVALSUITE_TRUSTED_PROXIES`` (e.g. 1
     behind nginx), ``EVALSUITE_TRUSTED_PROXY_ADDRESSES`` (comma-separated; default 127.0.0.1,::1),
-    ``EVALSUITE_INSECURE_COOKIES=1`` (plain-HTTP testing only).
+    ``EVALSUITE_INSECURE_COOKIES=1`` (plain-HTTP testing only), ``EVALSUITE_MEDIA_SERVER`` and
+    ``EVALSUITE_MEDIA_ACCESS_LOG`` (read by :mod:`study_app.media`; docs/deploy.md).
     """
     env = os.environ
     missing = [k for k in ("EVALSUITE_STUDY", "EVALSUITE_SECRET_KEY", "EVALSUITE_ADMIN_TOKEN")
