@@ -110,3 +110,15 @@ def test_smplx_corpus_gives_smplx_output(tmp_path):
     assert np.allclose(gen.poses[:, knee:knee + 3], gen.poses[:1, knee:knee + 3])
     elbow = 3 * SMPLX_JOINT_NAMES.index("right_elbow")              # modelled: it moves
     assert np.ptp(gen.poses[:, elbow:elbow + 3]) > 0
+
+
+def test_learning_criteria_read_the_genea2023_joints(genea2023):
+    from evalsuite.corpus import load_corpus
+    from evalsuite.generators.criteria import diversity
+    from evalsuite.generators.evaluation import segment_scores
+
+    seg = load_corpus(genea2023).split("test")[0]
+    natural = seg.load_motion()
+    assert segment_scores(natural, seg)["pose_mse"] == 0.0
+    div = diversity({"a": natural, "b": natural})
+    assert div["l1div"] > 0

@@ -88,12 +88,16 @@ def _upper_positions(m: Motion, joints: Sequence[str]) -> np.ndarray:
 
 
 def diversity(motions: Mapping[str, Motion], joints: Sequence[str] | None = None) -> dict[str, float]:
-    """``l1div`` (units) and ``div_k`` (units²) of hip-centred positions of ``joints`` (default: the GENEA 2020
-    upper-body joints all the motions have)."""
+    """``l1div`` (units) and ``div_k`` (units²) of hip-centred positions of ``joints`` (default: the joints of the
+    first preset of :mod:`evalsuite.generators.joint_presets`, the GENEA 2020 upper body on its skeleton, that all
+    the motions have)."""
+    from evalsuite.generators.joint_presets import default_joints
     from evalsuite.metrics.distribution import div_k, l1div
 
     if joints is None:
-        joints = [j for j in GENEA2020_UPPER if all(j in m.joint_names for m in motions.values())]
+        shared = [j for j in next(iter(motions.values())).joint_names
+                  if all(j in m.joint_names for m in motions.values())]
+        joints = [j for j in default_joints(shared) if j in shared]
     seqs = [_upper_positions(m, joints) for m in motions.values()]
     return {"l1div": l1div(seqs), "div_k": div_k(seqs)}
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from evalsuite.corpus.types import Corpus, Segment
 from evalsuite.errors import InputError
+from evalsuite.generators.joint_presets import default_joints
 from evalsuite.metrics.coupling import (
     energy_speed_correlation,
     joint_speed,
@@ -33,7 +34,6 @@ from evalsuite.metrics.coupling import (
 from evalsuite.motion import Motion
 from evalsuite.motion.io import list_motion_files, load_motion, save_motion
 from evalsuite.motion.ops import resample
-from evalsuite.motion.presets import GENEA2020_UPPER
 
 __all__ = ["evaluate_condition", "POSITION_CLASSES", "segment_scores", "natural_through_rate",
            "conditional_mean_through_rate", "causal_mean_through_rate"]
@@ -48,9 +48,10 @@ def _positions(m: Motion, names: Sequence[str]) -> np.ndarray:
 def segment_scores(gen: Motion, seg: Segment) -> dict[str, float]:
     """The criteria for one generated motion of one corpus segment (see the module doc)."""
     nat = resample(seg.load_motion(), gen.fps)
-    joints = [j for j in GENEA2020_UPPER if j in gen.joint_names and j in nat.joint_names]
+    shared = [j for j in gen.joint_names if j in nat.joint_names]
+    joints = [j for j in default_joints(shared) if j in shared]      # GENEA 2020 upper body, or GENEA 2023's, …
     if not joints:
-        raise InputError(f"segment {seg.id!r}: no GENEA 2020 upper-body joint in both motions")
+        raise InputError(f"segment {seg.id!r}: no upper-body joint of a preset in both motions")
     n = min(gen.n_frames, nat.n_frames)
     err = _positions(gen, joints)[:n] - _positions(nat, joints)[:n]
     out = {"pose_mse": float((err ** 2).sum(axis=-1).mean())}
