@@ -119,6 +119,10 @@ def test_gltf_round_trip_glb_and_gltf_with_separate_and_embedded_buffers(tmp_pat
     (tmp_path / "tube.gltf").write_text(json.dumps(doc))
     doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(binary).decode()
     (tmp_path / "embedded.gltf").write_text(json.dumps(doc))
+    del doc["skins"][0]["inverseBindMatrices"]       # bind pose from the joint nodes' transforms instead
+    doc["nodes"][0]["rotation"] = [0.0, 0.0, 0.0, 1.0]
+    (tmp_path / "no_ibm.gltf").write_text(json.dumps(doc))
+    assert np.allclose(read_skinned_gltf(tmp_path / "no_ibm.gltf").bind_positions, a.bind_positions, atol=1e-6)
     for name in ("tube.gltf", "embedded.gltf"):
         b = read_skinned_gltf(tmp_path / name)
         for field in ("vertices", "normals", "faces", "joints", "weights", "bind_positions"):
