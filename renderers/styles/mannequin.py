@@ -152,8 +152,8 @@ class MannequinMesh:
 
         def torso(j):
             t = float(np.clip(np.dot(med[j] - med[root], span) / height ** 2, 0.0, 1.0)) if height > 0 else 0.5
-            rx = np.interp(t, [0.0, 0.35, 0.75, 1.0], [hip_w, 0.85 * hip_w, chest_w, 0.7 * chest_w])
-            ry = np.interp(t, [0.0, 0.35, 0.75, 1.0], [0.062, 0.055, 0.066, 0.045])
+            rx = np.interp(t, [0.0, 0.35, 0.75, 1.0], [hip_w, 0.85 * hip_w, chest_w, 0.9 * chest_w])
+            ry = np.interp(t, [0.0, 0.35, 0.75, 1.0], [0.062, 0.055, 0.066, 0.052])
             return np.array([rx, ry, 0.7 * min(rx, ry)]) * s
 
         limbs, trunk = [], []
