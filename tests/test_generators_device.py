@@ -76,3 +76,15 @@ def test_determinism_within_a_tolerance_on_a_gpu(monkeypatch):
     monkeypatch.setattr(runner, "current_device", lambda: "cuda")
     assert runner._same_output(a, near) and not runner._same_output(a, far)
     assert runner._determinism_rule().startswith("within 0.001 x the value range (cuda)")
+
+
+def test_the_gpu_hook_moves_cpu_tensors_to_the_device():
+    # "meta" stands in for a GPU: tensors there have shapes but no data, and need no hardware
+    with _mode_class(torch)("meta"):
+        on_device = torch.zeros(2, 3, device="meta")
+        mixed = on_device + torch.from_numpy(np.ones((2, 3), dtype=np.float32))   # a CPU array meets it
+        assert mixed.device.type == "meta"
+        drawn = torch.randn(4, generator=torch.Generator().manual_seed(0))       # seeded CPU numbers ...
+        assert drawn.device.type == "meta"                                      # ... handed to the device
+        cpu_only = torch.ones(2) * 2                                            # nothing on the device: stays
+        assert cpu_only.device.type == "cpu" and np.asarray(cpu_only).tolist() == [2.0, 2.0]

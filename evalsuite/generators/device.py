@@ -90,8 +90,10 @@ def _mode_class(torch: Any) -> Any:
             kwargs = dict(kwargs or {})
             if func is torch.Tensor.numpy:
                 return args[0].detach().cpu().numpy()
+            if func is torch.Tensor.__array__:            # np.asarray(tensor)
+                return args[0].detach().cpu().__array__(*args[1:], **kwargs)
             if func in (torch.Tensor.to, torch.Tensor.cpu, torch.Tensor.cuda, torch.Tensor.tolist,
-                        torch.Tensor.item, torch.from_numpy, torch.Tensor.__array__):
+                        torch.Tensor.item, torch.from_numpy):
                 return func(*args, **kwargs)
             gen = kwargs.get("generator")
             if gen is not None and gen.device.type == "cpu":        # seeded CPU numbers, then to the device
