@@ -271,17 +271,36 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
         self_cpu = resource.getrusage(resource.RUSAGE_SELF)
         client_cpu = (self_cpu.ru_utime + self_cpu.ru_stime) - (cpu0[1].ru_utime + cpu0[1].ru_stime)
         raw, rows = fetch_export(nginx.url)
+        seen = nginx_times(nginx.access_log)
     finally:
         server.stop()
         nginx.stop()
     check = verify(clients, raw, rows)
     finished = sum(1 for s in raw["sessions"] if s["status"] == "finished")
     lat = {f"{kind}_p{q}": pct(stats[kind], q) for kind in ("enter", "page", "answer", "video") for q in (50, 95, 99)}
+    lat.update({f"nginx_{kind}_p{q}": pct(seen[kind], q) for kind in ("enter", "page", "answer") for q in (50, 99)})
     return {"name": name, "participants": participants, "wall_s": wall, "finished": finished, "errors": errors,
             "crash": crash, "retries": sum(c.retries for c in clients), "server_cpu_s": server_cpu,
             "retry_reasons": sum((c.retry_reasons for c in clients), collections.Counter()),
             "client_cpu_s": client_cpu,
             "answers_per_s": check["acknowledged"] / wall, **lat, **check}
+
+
+def nginx_times(path):
+    """Seconds nginx took per entry, page view and answer (its access log: first byte read to last byte
+    sent), i.e. the server's side of the latency without the simulated browsers' own waiting for a CPU."""
+    seen = collections.defaultdict(list)
+    with open(path) as fh:
+        for line in fh:
+            parts = line.split()
+            if len(parts) != 5 or parts[2] == "502":
+                continue
+            seconds, method, uri = float(parts[0]), parts[3], parts[4]
+            kind = ("enter" if uri.startswith("/start/") else "answer" if method == "POST" and "/answer/" in uri
+                    else "page" if method == "GET" and re.fullmatch(r"/s/[^/]+/", uri) else None)
+            if kind:
+                seen[kind].append(seconds)
+    return seen
 
 
 def group_cpu(groups):
@@ -328,7 +347,8 @@ def report(r):
     for kind, label in (("enter", "entry (Prolific link)"), ("page", "page view"), ("answer", "answer POST"),
                         ("video", "video GET (nginx)")):
         print(f"{label:22s} p50 {r[kind + '_p50']:6.0f} ms   p95 {r[kind + '_p95']:6.0f} ms   "
-              f"p99 {r[kind + '_p99']:6.0f} ms")
+              f"p99 {r[kind + '_p99']:6.0f} ms" + (f"   (nginx's own time p50 {r['nginx_' + kind + '_p50']:.0f} ms, "
+                                                 f"p99 {r['nginx_' + kind + '_p99']:.0f} ms)" if kind != "video" else ""))
     print(f"answers acknowledged {r['acknowledged']}, stored {r['stored']}: lost {r['lost']}, "
           f"changed {r['changed']}, duplicated {r['duplicated']}, stored without ack {r['unexpected']}")
     print(f"results.csv rows {r['csv_rows']} (expected {r['csv_rows_expected']}), "

@@ -118,6 +118,7 @@ class Nginx:
         self.binary, self.port = binary, free_port()
         self.dir = pathlib.Path(tempfile.mkdtemp(prefix="evalsuite-nginx-"))
         self.media_log = str(media_log)
+        self.access_log = self.dir / "access.log"     # seconds nginx took per request, for the benchmark
         site = render_site({"NGINX_LISTEN": f"127.0.0.1:{self.port}", "NGINX_SERVER_NAME": "_",
                             "EVALSUITE_APP": app, "EVALSUITE_STIMULI": str(pathlib.Path(stimuli).resolve()),
                             "EVALSUITE_MEDIA_ACCESS_LOG": self.media_log})
@@ -128,7 +129,9 @@ class Nginx:
             f"{user}daemon off;\nworker_processes {workers};\npid {self.dir / 'nginx.pid'};\n"
             f"error_log {self.dir / 'error.log'} warn;\nevents {{ worker_connections 8192; }}\n"
             f"http {{\n    include /etc/nginx/mime.types;\n    default_type application/octet-stream;\n"
-            f"    sendfile on;\n    keepalive_timeout 65;\n{temp}\n    access_log {self.dir / 'access.log'};\n"
+            f"    sendfile on;\n    keepalive_timeout 65;\n{temp}\n"
+            "    log_format evalsuite_timing '$request_time $upstream_response_time $status $request_method $uri';\n"
+            f"    access_log {self.access_log} evalsuite_timing;\n"
             f"    include {self.dir / 'site.conf'};\n}}\n")
         self.proc: subprocess.Popen | None = None
 
