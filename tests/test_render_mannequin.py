@@ -159,3 +159,15 @@ def test_mannequin_matches_its_reference_image(tmp_path, monkeypatch):
     ref = iio.imread(DATA / "mannequin_beat_96x72.png").astype(int)
     diff = np.abs(img - ref).max(axis=2)
     assert diff.mean() < 3.0 and (diff > 48).mean() < 0.02, f"mean {diff.mean():.2f}, {(diff > 48).mean():.3f}"
+
+
+def test_legs_ending_at_the_ankle_get_feet_pointing_forward():
+    mesh = MannequinMesh(NAMES, PARENTS, TPOSE[None], 165.0)
+    v, _ = mesh.vertices(TPOSE[None])
+    ankle = TPOSE[NAMES.index("LeftAnkle")]
+    near = v[0][np.linalg.norm(v[0] - ankle, axis=1) < 25]
+    assert near[:, 2].max() > ankle[2] + 0.09 * 165, "a foot reaches forward (+Z) of the ankle"
+    assert near[:, 2].min() > ankle[2] - 0.05 * 165, "and not backward"
+    beat = beat_standin(0.1)
+    with_toes = MannequinMesh(beat.joint_names, beat.parents, beat.positions(), 165.0)
+    assert with_toes._stubs == [], "a skeleton with toe joints draws its own feet"

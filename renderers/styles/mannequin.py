@@ -20,7 +20,8 @@ clip). Parts (radii as fractions of the figure size ``s`` shared by the conditio
 - a head ellipsoid beyond the head joint (along neck -> head) facing ``forward = (left - right) x up`` (the
   shoulder line); ``face="visible"`` adds a nose and a dark visor at eye level, ``"blank"`` leaves a plain head
   (a face mask, as the GENEA Leaderboard's stimuli); joints below the head (jaw, eyes, head top) are not drawn;
-- a mitten (a flat capsule along forearm -> wrist) on each wrist without finger joints;
+- a mitten (a flat capsule along forearm -> wrist) on each wrist without finger joints, a foot (pointing forward)
+  on each ankle without a toe joint;
 - a soft contact shadow: a disc under the feet (or root) on the floor, darkest at its centre and fading to the
   floor colour at its rim, when the view has a floor (``floor_height``, set by the renderer).
 
@@ -179,6 +180,9 @@ class MannequinMesh:
                 trunk.append((int(pair[1][0]), int(pair[0][0]), r * s, r * s))
         # mittens on wrists without fingers (the topmost wrist joint of a chain)
         self._mittens = _mittens(kinds, par)
+        # a foot on each ankle without a toe joint below it (legs that end at the ankle)
+        self._stubs = [j for j, k in enumerate(kinds) if k == "ankle" and par[j] >= 0
+                       and not any(kinds[c] == "toe" for c in np.flatnonzero(par == j))]
         body = srgb_to_linear(body_color)
         fine, coarse = _template(12, 3), _template(6, 2)
         fingers = [b for b in limbs if b[2][0] < 0.012 * s]
@@ -195,6 +199,9 @@ class MannequinMesh:
         m = len(self._mittens)
         add("mitten", None, fine, np.tile([0.013, 0.024, 0.02], (m, 1)) * s,
             np.tile([0.012, 0.028, 0.03], (m, 1)) * s, body)
+        f = len(self._stubs)
+        add("foot", None, fine, np.tile([0.024, 0.02, 0.02], (f, 1)) * s, np.tile([0.022, 0.014, 0.016], (f, 1)) * s,
+            body)
         self.face = face
         if head is not None:
             add("head", None, _template(20, 6), [HEAD * s], [HEAD * s], body)
@@ -258,6 +265,10 @@ class MannequinMesh:
                 d = _unit(w - pos[:, [m[1] for m in self._mittens]], -up[:, None])
                 a, b = w + 0.012 * s * d, w + 0.07 * s * d
                 axes = _axes(d, np.broadcast_to(up[:, None], d.shape), lateral[:, None])
+            elif kind == "foot":
+                ankle = pos[:, self._stubs] - 0.012 * s * up[:, None]
+                a, b = ankle, ankle + (0.085 * forward[:, None] - 0.01 * up[:, None]) * s
+                axes = _axes(_unit(b - a, forward[:, None]), lateral[:, None], up[:, None])
             else:
                 if head is None:
                     h = pos[:, self.head]
