@@ -32,7 +32,7 @@ def _session_status(status: str) -> str:
 
 def playback_of(study: Study, page: dict, ans, dump: dict) -> PlaybackCheck | None:
     """The server's judgement of playback on an answered page (:mod:`study_app.playback`); None without
-    media. Clip durations are looked up for rating pages (generated sounds: only the request check)."""
+    media. Clip durations are looked up for rating pages, and given by the kind for generated sounds."""
     kind = get_kind(page["type"])
     n = kind.n_slots(page)
     if not n:
@@ -41,6 +41,8 @@ def playback_of(study: Study, page: dict, ans, dump: dict) -> PlaybackCheck | No
     if kind.block:
         files = [kind.media(study, page, k).file for k in range(n)]
         seconds = [media_seconds(study, f) if f else None for f in files]
+    else:
+        seconds = [kind.generated_seconds(page, k) for k in range(n)]
     return check_playback(n, dump.get("media_requests", {}).get((ans.session_id, ans.page_index), set()),
                           seconds, ans.rt_ms, study.playback_min_fraction, study.require_full_playback,
                           dump.get("media_served", {}).get((ans.session_id, ans.page_index), {})

@@ -34,6 +34,7 @@ LEVEL = 0.25            # peak of the plain tone, about -12 dBFS: room for the l
 LEVEL_JITTER_DB = 1.0   # a trial's level is LEVEL times 10**(u/20), u uniform in +-this (seeded)
 QUIET_DB = -6.0
 TONES = ("plain", "quiet", "antiphase")
+TRIAL_SECONDS = 3 * TONE_SECONDS + 2 * GAP_SECONDS      # length of one trial's sound
 #: the six orders of the three tones; a plan's trial names one of them by index
 ORDERS = tuple(itertools.permutations(TONES))
 

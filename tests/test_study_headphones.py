@@ -7,6 +7,7 @@ import hashlib
 import io
 import json
 import random
+import time
 import wave
 from collections import Counter
 
@@ -23,6 +24,7 @@ from study_app.headphones import (
     ORDERS,
     RATE,
     TONE_SECONDS,
+    TRIAL_SECONDS,
     correct_choice,
     trial_orders,
     trial_samples,
@@ -287,3 +289,24 @@ def test_sizes_headers_and_hashes_of_the_sounds_do_not_reveal_the_answer():
     assert sum(digest in learnt for digest, _, _, _ in trials[360:]) == 0
     answers = Counter(answer for _, _, _, answer in trials)
     assert answers == {1: 240, 2: 240, 3: 240}
+
+
+def test_a_screening_answered_faster_than_a_trial_lasts_is_flagged(folder, tmp_path):
+    """The playback judgement of the headphone page (raw JSON): every sound fetched in full, but answered before
+    one trial's sound (TRIAL_SECONDS) could have played, is implausible; staying that long is not."""
+    app = make_app(folder, tmp_path, "cont")
+    judged = {}
+    for pid, dwell in (("phphasty1", 0.0), ("phpslow01", TRIAL_SECONDS + 0.2)):
+        p, _, data, csrf, spec = walk_to_screening(app, pid, "hp-cont")
+        for url in data["videos"]:
+            assert p.client.get(url).status_code == 200
+        time.sleep(dwell)
+        assert p.submit(data, csrf, {"choices": n_correct_answer(spec, 6)}).status_code == 200
+        judged[p.sid] = dwell
+    raw = json.loads(app.test_client().get("/admin/export/raw.json", headers={"Authorization": f"Bearer {h.ADMIN}"})
+                     .get_data(as_text=True))
+    pb = {a["session"]: a["playback"] for a in raw["answers"] if a["page"] == "headphones"}
+    hasty, slow = (sid for sid, d in sorted(judged.items(), key=lambda kv: kv[1]))
+    assert pb[hasty]["implausible"] and pb[hasty]["min_ms"] == int(1000 * TRIAL_SECONDS)
+    assert any(f"for {TRIAL_SECONDS:.1f} s of video" in r for r in pb[hasty]["reasons"])
+    assert not pb[slow]["implausible"] and pb[slow]["reasons"] == []

@@ -96,6 +96,10 @@ class PageKind:
     def media(self, study: Study, spec: dict, slot: int) -> Media:
         raise PayloadError(f"pages of type {spec['type']} have no media")
 
+    def generated_seconds(self, spec: dict, slot: int) -> float | None:
+        """Duration of a slot's generated media (``Media.body``) for the playback time check; None: unknown."""
+        return None
+
     def page_data(self, study: Study, spec: dict, cfg: dict) -> dict:
         return {}
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import random
 from typing import Any
 
-from study_app.headphones import correct_choice, trial_orders, trial_seeds, trial_wav
+from study_app.headphones import TRIAL_SECONDS, correct_choice, trial_orders, trial_seeds, trial_wav
 from study_app.pages.base import Media, Outcome, PageKind
 from study_app.payload import PayloadError, int_in, only_keys
 
@@ -51,6 +51,9 @@ class HeadphoneCheckKind(PageKind):
     def media(self, study: Any, spec: dict, slot: int) -> Media:
         seeds = spec.get("sounds")     # plans built before the seeds existed: the fixed sounds
         return Media(body=trial_wav(spec["trials"][slot], seeds[slot] if seeds else None), mimetype="audio/wav")
+
+    def generated_seconds(self, spec: dict, slot: int) -> float | None:
+        return TRIAL_SECONDS            # the playback time check: the page stays open at least one trial
 
     def page_data(self, study: Any, spec: dict, cfg: dict) -> dict:
         return {"play_once": True}          # Woods et al.: each trial is heard once
