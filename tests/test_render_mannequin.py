@@ -171,3 +171,18 @@ def test_legs_ending_at_the_ankle_get_feet_pointing_forward():
     beat = beat_standin(0.1)
     with_toes = MannequinMesh(beat.joint_names, beat.parents, beat.positions(), 165.0)
     assert with_toes._stubs == [], "a skeleton with toe joints draws its own feet"
+
+
+def test_partial_redraw_over_the_floor_leaves_no_trace_of_earlier_frames():
+    """Frames drawn one after another (only the figure's box is redrawn, the floor is static) equal frames drawn
+    afresh, while the figure walks sideways across the floor."""
+    m = waving_motion(0.34)
+    pos = m.positions() + (np.linspace(0.0, 60.0, m.n_frames)[:, None, None] * [1, 0, 0])
+    moving = Motion.from_positions(pos, NAMES, 30.0, PARENTS)
+    settings = RenderSettings(width=96, height=72, body="mannequin", center=False)
+    view = view_for([moving], settings)
+    assert view.floor_height is not None
+    sequence = render_frames([moving], settings, view=view, frames=range(moving.n_frames))
+    for k in (3, moving.n_frames - 1):
+        fresh = render_frames([moving], settings, view=view, frames=[k])[0]
+        np.testing.assert_array_equal(sequence[k], fresh)
