@@ -1,8 +1,8 @@
-"""Render settings, the shared view of a segment, and the offscreen pyrender renderer.
+"""Render settings and the offscreen pyrender renderer.
 
-A :class:`View` (camera, figure size, floor) is computed ONCE per segment from the motion
-of every condition of that segment, so all conditions are framed identically and drawn
-with the same thickness. :class:`FigureRenderer` renders frames offscreen through EGL (or
+A :class:`View` (camera, figure size, floor; :mod:`renderers.framing`, re-exported here) is
+computed ONCE per segment from the motion of every condition of that segment, so all
+conditions are framed identically and drawn with the same thickness. :class:`FigureRenderer` renders frames offscreen through EGL (or
 whatever ``PYOPENGL_PLATFORM`` says) and reads back colour only.
 """
 from __future__ import annotations
@@ -104,7 +104,7 @@ class RenderSettings:
 
 
 class FigureRenderer:
-    """Offscreen renderer of stick figures seen through one :class:`View`.
+    """Offscreen renderer of figures (the meshes of any body style) seen through one :class:`View`.
 
     Use as a context manager (on exit the figures leave the scene; the GL context is kept
     for the next renderer of the same size, see :func:`renderers._gl.offscreen_renderer`)::
