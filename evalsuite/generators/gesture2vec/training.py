@@ -216,22 +216,20 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     with torch.no_grad():
         z0 = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), config.codebook, replace=len(ct) < config.codebook))])
         vq.codebook.weight.copy_(z0 + 0.01 * torch.randn_like(z0))
-    frozen = [*vq.decoder.parameters(), *vq.out.parameters()] if stages.weakened_decoder else []
-    for p in frozen:  # weakened decoder: no gradient reaches it, the encoder carries the reconstruction
-        p.requires_grad_(False)
+    decoder = [*vq.decoder.parameters(), *vq.out.parameters()]
+    for p in decoder:  # weakened decoder: no gradient reaches it, the encoder carries the reconstruction
+        p.requires_grad_(not stages.weakened_decoder)
     opt = torch.optim.Adam([p for p in vq.parameters() if p.requires_grad], lr=stages.learning_rate)
-    decoder_opt = torch.optim.Adam([*vq.decoder.parameters(), *vq.out.parameters()], lr=stages.learning_rate)
+    decoder_opt = torch.optim.Adam(decoder, lr=stages.learning_rate)
     total_vq = stages.vq_epochs + stages.vq_decoder_epochs
     state = {"vq": vq, "opt": opt, "decoder_opt": decoder_opt, "rng": rng, "history": history, "stopped": stopped}
     epoch, done = ck.start("vq-dvae", state)
-    switched = False
     while not done and epoch < total_vq:
         decoder_only = epoch >= stages.vq_epochs
-        if decoder_only and not switched:  # the decoder alone from here on (also when resumed here)
-            switched = True
+        if decoder_only and opt is not decoder_opt:  # the decoder alone from here on (also when resumed here)
             for p in [*vq.encoder.parameters(), *vq.codebook.parameters()]:
                 p.requires_grad_(False)
-            for p in frozen:
+            for p in decoder:
                 p.requires_grad_(True)
             opt = decoder_opt
         vq.train()
