@@ -184,7 +184,9 @@ class MannequinMesh:
         self._stubs = [j for j, k in enumerate(kinds) if k == "ankle" and par[j] >= 0
                        and not any(kinds[c] == "toe" for c in np.flatnonzero(par == j))]
         body = srgb_to_linear(body_color)
-        fine, coarse = _template(12, 3), _template(6, 2)
+        # tessellation: triangles cost on a CPU rasteriser, so limbs (whose ends hide in their neighbours) get
+        # fewer rings than the torso, fingers fewer sections
+        fine, limb, coarse = _template(12, 3), _template(10, 2), _template(6, 2)
         fingers = [b for b in limbs if b[2][0] < 0.012 * s]
         limbs = [b for b in limbs if b[2][0] >= 0.012 * s]
         self._groups: list[tuple[str, Any, _Parts]] = []
@@ -193,23 +195,23 @@ class MannequinMesh:
             if len(r0):
                 self._groups.append((kind, idx, _Parts(template, np.asarray(r0), np.asarray(r1), color)))
 
-        for kind, bones, tpl in (("trunk", trunk, fine), ("limb", limbs, fine), ("limb", fingers, coarse)):
+        for kind, bones, tpl in (("trunk", trunk, fine), ("limb", limbs, limb), ("limb", fingers, coarse)):
             idx = (np.array([b[0] for b in bones], int), np.array([b[1] for b in bones], int))
             add(kind, idx, tpl, [b[2] for b in bones], [b[3] for b in bones], body)
         m = len(self._mittens)
-        add("mitten", None, fine, np.tile([0.013, 0.024, 0.02], (m, 1)) * s,
+        add("mitten", None, limb, np.tile([0.013, 0.024, 0.02], (m, 1)) * s,
             np.tile([0.012, 0.028, 0.03], (m, 1)) * s, body)
         f = len(self._stubs)
-        add("foot", None, fine, np.tile([0.024, 0.02, 0.02], (f, 1)) * s, np.tile([0.022, 0.014, 0.016], (f, 1)) * s,
+        add("foot", None, limb, np.tile([0.024, 0.02, 0.02], (f, 1)) * s, np.tile([0.022, 0.014, 0.016], (f, 1)) * s,
             body)
         self.face = face
         if head is not None:
-            add("head", None, _template(20, 6), [HEAD * s], [HEAD * s], body)
+            add("head", None, _template(16, 5), [HEAD * s], [HEAD * s], body)
             if face == "visible":
-                add("nose", None, _template(8, 3), [np.array([0.009, 0.014, 0.016]) * s],
+                add("nose", None, _template(6, 2), [np.array([0.009, 0.014, 0.016]) * s],
                     [np.array([0.009, 0.014, 0.016]) * s], body)
                 visor = HEAD * s * [0.9, 0.2, 0.62]
-                add("visor", None, _template(16, 4), [visor], [visor], srgb_to_linear(visor_color))
+                add("visor", None, _template(12, 3), [visor], [visor], srgb_to_linear(visor_color))
         # contact shadow: a fan of rings around the centre
         seg = 24
         k = np.arange(seg)
