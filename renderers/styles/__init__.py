@@ -13,6 +13,7 @@ array per frame, updated in place, so a style's only job is to turn joint positi
 """
 from __future__ import annotations
 
+import abc
 from typing import Any, Protocol
 
 import numpy as np
@@ -33,17 +34,17 @@ class BodyMesh(Protocol):
         ...
 
 
-class BodyStyle:
+class BodyStyle(abc.ABC):
     """A way to draw a motion. Subclasses set ``name`` and ``description`` and implement :meth:`mesh`."""
 
     name: str = ""
     description: str = ""
 
+    @abc.abstractmethod
     def mesh(self, motion: Any, settings: Any, size: float) -> BodyMesh:
         """The mesh of ``motion`` (a :class:`evalsuite.motion.Motion` with non-body joints removed) drawn with
         ``settings`` (:class:`renderers.scene.RenderSettings`); ``size`` is the figure size shared by the
         conditions of a segment (radii scale with it, so no condition looks thicker than another)."""
-        raise NotImplementedError
 
 
 STYLES: Registry[BodyStyle] = Registry("body style", "evalsuite.renderer_styles", base=BodyStyle,
