@@ -9,13 +9,11 @@ about any trial, and may be replayed: it is not a media slot of the page and is 
 from __future__ import annotations
 
 import functools
-import io
-import wave
 
 import numpy as np
 from flask import Blueprint, Response, request
 
-from study_app.headphones import LEVEL, RATE
+from study_app.headphones import LEVEL, RATE, stereo_wav
 from study_app.participant import _own
 
 bp = Blueprint("calibration", __name__)
@@ -43,14 +41,7 @@ def calibration_samples() -> np.ndarray:
 @functools.lru_cache(maxsize=1)
 def calibration_wav() -> bytes:
     """The calibration noise as a 16-bit stereo WAV file (made once per process)."""
-    pcm = np.round(calibration_samples() * 32767).astype("<i2")
-    buf = io.BytesIO()
-    with wave.open(buf, "wb") as w:
-        w.setnchannels(2)
-        w.setsampwidth(2)
-        w.setframerate(RATE)
-        w.writeframes(pcm.tobytes())
-    return buf.getvalue()
+    return stereo_wav(calibration_samples())
 
 
 @bp.route("/s/<sid>/calibration.wav")

@@ -105,7 +105,12 @@ def trial_wav(order: int, seed: int | None = None) -> bytes:
     and seed). The study app passes the trial's stored seed, so a range request gets the same bytes."""
     if not 0 <= order < len(ORDERS):
         raise ValueError(f"trial order must be in 0..{len(ORDERS) - 1}, got {order}")
-    pcm = np.round(trial_samples(order, seed) * 32767).astype("<i2")
+    return stereo_wav(trial_samples(order, seed))
+
+
+def stereo_wav(samples: np.ndarray) -> bytes:
+    """Samples ``(n, 2)`` in [-1, 1] at :data:`RATE` as a 16-bit stereo WAV file."""
+    pcm = np.round(samples * 32767).astype("<i2")
     buf = io.BytesIO()
     with wave.open(buf, "wb") as w:
         w.setnchannels(2)
