@@ -217,8 +217,12 @@ def _row(spec: dict, info: dict) -> dict:
 
 
 def embodiment_of(settings) -> dict[str, str]:
-    """The manifest's embodiment columns (contracts.manifest.EMBODIMENT) for clips rendered with ``settings``."""
-    character = pathlib.Path(settings.character).name if settings.body == "character" and settings.character else ""
+    """The manifest's embodiment columns (contracts.manifest.EMBODIMENT) for clips rendered with ``settings``; the
+    character style names its file, evalsuite's own when ``settings.character`` is unset."""
+    character = ""
+    if settings.body == "character":
+        from renderers.styles.character import DEFAULT_CHARACTER
+        character = pathlib.Path(settings.character or DEFAULT_CHARACTER).name
     return {"style": settings.body, "character": character, "framing": settings.framing, "face": settings.face}
 
 

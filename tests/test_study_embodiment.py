@@ -66,3 +66,12 @@ def test_render_stimuli_writes_the_embodiment_columns(tmp_path):
     rows = read_rows(tmp_path / "out" / "manifest.csv")
     assert rows and all((r["style"], r["character"], r["framing"], r["face"]) == ("mannequin", "", "above-knees",
                                                                                   "blank") for r in rows)
+
+
+def test_the_character_style_names_its_character_even_the_shipped_one():
+    from renderers.scene import RenderSettings
+    from renderers.stimuli import embodiment_of
+
+    assert embodiment_of(RenderSettings(body="character"))["character"] == "mpfb2_neutral.glb"
+    assert embodiment_of(RenderSettings(body="character", character="/x/hero.glb"))["character"] == "hero.glb"
+    assert embodiment_of(RenderSettings(body="mannequin"))["character"] == ""
