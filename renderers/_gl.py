@@ -6,6 +6,13 @@ respect a value the user set. Under ``osmesa`` (which needs PyOpenGL >= 3.1.4) p
 shader cache misses on every draw because the context key is a fresh ctypes object each
 call; the patch below keys it by the context's address instead.
 
+pyrender imports trimesh at the top of its modules, and trimesh imports scipy (spatial, sparse, ndimage,
+optimize): about a second of a rendering command's start, though drawing our meshes needs none of it.
+:func:`import_pyrender` therefore imports pyrender with a stand-in ``trimesh`` module that loads the real
+package the first time anything asks for one of its attributes (the stick figure's templates, a glTF
+character, pyrender's shadow pass); only ``trimesh.transformations`` (numpy only), which pyrender's nodes use
+directly, is loaded at once.
+
 Also here: the cached offscreen contexts, our colour-only framebuffer read and the shader
 cache that draws meshes with the cheap ``shaders/stick.*`` program.
 """
@@ -14,8 +21,11 @@ from __future__ import annotations
 import atexit
 import contextlib
 import ctypes
+import importlib
+import importlib.util
 import os
 import pathlib
+import sys
 import threading
 import types
 
@@ -39,11 +49,53 @@ def import_pyrender():
 
         contextdata.getContext = get_context
         _PATCHED = True
+    if "pyrender" not in sys.modules:
+        _defer_trimesh()
     import pyrender
     import pyrender.renderer
 
     _install_samples_hook(pyrender.renderer)
     return pyrender
+
+
+class _DeferredTrimesh(types.ModuleType):
+    """Stands in for the ``trimesh`` package until one of its attributes is first asked for."""
+
+    def __getattr__(self, name):
+        return getattr(_load_trimesh(self), name)
+
+
+_TRIMESH_LOCK = threading.Lock()
+
+
+def _load_trimesh(stand_in: types.ModuleType) -> types.ModuleType:
+    """Import the real trimesh in place of ``stand_in`` (once) and return it."""
+    with _TRIMESH_LOCK:
+        if sys.modules.get("trimesh") is stand_in:
+            del sys.modules["trimesh"]
+            try:
+                real = importlib.import_module("trimesh")
+            except BaseException:
+                sys.modules["trimesh"] = stand_in
+                raise
+            # submodules imported under the stand-in become attributes of the real package too
+            for name, module in list(sys.modules.items()):
+                if name.count(".") == 1 and name.startswith("trimesh.") and not hasattr(real, name[8:]):
+                    setattr(real, name[8:], module)
+        return sys.modules["trimesh"]
+
+
+def _defer_trimesh() -> None:
+    """Put a :class:`_DeferredTrimesh` in ``sys.modules`` unless trimesh is imported already or missing."""
+    if "trimesh" in sys.modules:
+        return
+    spec = importlib.util.find_spec("trimesh")
+    if spec is None or spec.submodule_search_locations is None:
+        return
+    stand_in = _DeferredTrimesh("trimesh", "trimesh, loaded on first use (renderers._gl)")
+    stand_in.__path__ = list(spec.submodule_search_locations)   # submodules import without the package
+    sys.modules["trimesh"] = stand_in
+    importlib.import_module("trimesh.transformations")
 
 
 _SAMPLES = threading.local()

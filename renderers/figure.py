@@ -13,7 +13,6 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-import trimesh
 
 LEFT, RIGHT, CENTRE = 0, 1, 2
 
@@ -142,6 +141,8 @@ class FigureMesh:
     """
 
     def __init__(self, joint_names, parents, style: FigureStyle, size: float, rest_positions=None):
+        import trimesh  # here: importing this module (every renderer does) stays free of trimesh and scipy
+
         self.style = style
         names = list(joint_names)
         parents = np.asarray(parents, dtype=np.int64)

@@ -205,6 +205,32 @@ def test_egl_is_the_default_platform_and_a_user_choice_is_kept():
     assert "egl" not in out.stdout.lower()
 
 
+def test_rendering_the_mannequin_imports_neither_trimesh_nor_scipy_and_trimesh_still_works_after():
+    """A rendering command's start: pyrender is imported with trimesh deferred (renderers._gl), so drawing a
+    mannequin loads neither trimesh nor scipy (about a second); asking for trimesh afterwards gets the real one."""
+    import sys
+
+    code = ("import sys\n"
+            "from evalsuite.motion import Motion\n"
+            "from renderers.render import render_frames\n"
+            "from renderers.scene import RenderSettings\n"
+            "import numpy as np\n"
+            "t = np.array([[0, 1, 0], [0, 1.5, 0], [0.3, 1.4, 0], [-0.3, 1.4, 0], [0.1, 0.5, 0], [-0.1, 0.5, 0]], float)\n"
+            "m = Motion.from_positions(t[None], ['Hips', 'Head', 'LeftHand', 'RightHand', 'LeftFoot', 'RightFoot'],"
+            " 30.0, [-1, 0, 0, 0, 0, 0])\n"
+            "frame = render_frames([m], RenderSettings(width=64, height=48, body='mannequin'))[0]\n"
+            "print('drawn', int((frame < 200).any(axis=-1).sum()))\n"
+            "print('loaded', sorted({k.split('.')[0] for k in sys.modules} & {'scipy'}),"
+            " type(sys.modules['trimesh']).__name__)\n"
+            "import trimesh\n"
+            "print('after', trimesh.creation.icosphere(subdivisions=1).vertices.shape,"
+            " trimesh.transformations.identity_matrix().shape, type(sys.modules['trimesh']).__name__)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.splitlines()
+    assert int(out[0].split()[1]) > 20, out                      # the figure was drawn
+    assert out[1] == "loaded [] _DeferredTrimesh", out
+    assert out[2] == "after (42, 3) (4, 4) module", out
+
+
 def test_floor_and_shadow():
     from renderers.figure import FigureStyle
 

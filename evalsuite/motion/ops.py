@@ -7,7 +7,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from evalsuite.errors import MotionError
 from evalsuite.motion.motion import Motion
@@ -112,6 +111,8 @@ def resample(motion: Motion, fps: float) -> Motion:
     values = motion.values
     out = values[i0] * (1 - w)[:, None] + values[i1] * w[:, None]  # exact for position channels
     starts = sk.channel_starts
+    from scipy.spatial.transform import Rotation  # here, not at the top: rendering imports ops (1 s of scipy)
+
     from evalsuite.motion.fk import local_rotation_elements
 
     local = local_rotation_elements(sk, values)
