@@ -47,3 +47,26 @@ def test_windows_gather_what_make_sequences_stacks(tmp_path):
     idx = np.random.default_rng(0).permutation(len(x))[:17]
     assert np.array_equal(xs[idx], x[idx]) and np.array_equal(ys[idx], y[idx])
     assert isinstance(xs, Windows) and (tmp_path / "speech_windows.npy").exists()
+
+
+def test_rows_mapped_and_release(tmp_path):
+    from evalsuite.generators import datastream
+    from evalsuite.generators.datastream import Mapped, Rows
+
+    arrays = _segments(3, seed=4)
+    store = SegmentStore(tmp_path / "r.npy", arrays)
+    x = np.concatenate(arrays)
+    rows = Rows(store)
+    idx = np.random.default_rng(1).permutation(len(x))[:40]
+    assert len(rows) == len(x) and np.array_equal(rows[idx], x[idx])
+    doubled = Mapped(lambda a: 2 * a, store)
+    assert len(doubled) == len(arrays) and all(np.array_equal(d, 2 * a) for d, a in zip(doubled, arrays))
+    assert np.array_equal(doubled[-1], 2 * arrays[-1])
+    with pytest.raises(IndexError):
+        store[len(arrays)]
+    datastream.RELEASE_BYTES, saved = 1, datastream.RELEASE_BYTES   # release after every gather
+    try:
+        assert np.array_equal(rows[idx], x[idx]) and store._read == 0
+        assert np.array_equal(rows[idx[::-1]], x[idx[::-1]])   # read again after the pages were dropped
+    finally:
+        datastream.RELEASE_BYTES = saved

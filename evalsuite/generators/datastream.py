@@ -7,12 +7,18 @@ of the map. :func:`mean_std` gives exactly (bit for bit) what ``np.concatenate(a
 give, one segment at a time: both sums run over the frames in order, as numpy's reduction over axis 0 does
 for two or more columns (a single column is concatenated: it is small). :class:`Windows` stands for the
 ``(N, length, D)`` array of overlapping training windows without making it: ``windows[idx]`` gathers a batch
-from the map.
+from the map, and :class:`Rows` the ``(N, D)`` concatenation of a store's rows. :class:`Mapped` applies a
+function to each segment when it is read (normalised or differenced segments, one at a time).
+
+A map's pages that a process has read count in its resident memory (``ru_maxrss``) until it unmaps them, so a
+store that gathers batches drops them (``madvise(MADV_DONTNEED)``; they stay in the page cache) after every
+:data:`RELEASE_BYTES` read: a pass over a 10-hour corpus holds at most that much of it.
 """
 from __future__ import annotations
 
+import mmap
 import pathlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -21,8 +27,10 @@ from evalsuite.corpus.types import Segment
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import SegmentArrays, corpus_arrays
 
-__all__ = ["SegmentStore", "mean_std", "Windows", "stream_arrays"]
+__all__ = ["SegmentStore", "mean_std", "Windows", "Rows", "Mapped", "stream_arrays", "RELEASE_BYTES"]
 
+RELEASE_BYTES = 64 << 20  # pages of a map read (counted 4 KiB per gathered row at least) before they are dropped
+_PAGE = 4096
 _HEADER = 128  # bytes of the .npy header (version 1.0), written once with room for any shape
 
 
@@ -44,6 +52,7 @@ class SegmentStore(Sequence[np.ndarray]):
         self.dtype = np.dtype(dtype) if dtype is not None else None  # None: the first array's
         self._lengths: list[int] = []
         self._width: int | None = None
+        self._read = 0
         self._fh = open(self.path, "wb")  # noqa: SIM115 (closed by finish())
         self._fh.write(_npy_header((0, 0), np.dtype(np.float32)))  # rewritten by finish()
         if arrays is not None:
@@ -80,7 +89,29 @@ class SegmentStore(Sequence[np.ndarray]):
     def __getitem__(self, i: Any) -> Any:
         if isinstance(i, slice):
             return [self[k] for k in range(*i.indices(len(self)))]
+        if not -len(self) <= i < len(self):
+            raise IndexError(f"segment {i} of {len(self)}")
+        i = i + len(self) if i < 0 else i
         return self.data[self.offsets[i]:self.offsets[i + 1]]
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        return (self[i] for i in range(len(self)))
+
+    def gather(self, rows: np.ndarray) -> np.ndarray:
+        """``data[rows]`` (any integer array of row numbers) as an array in memory; the map's pages are dropped
+        from this process's memory after every :data:`RELEASE_BYTES` gathered."""
+        out = np.asarray(self.data[rows])
+        self._read += np.asarray(rows).size * max(self.data.shape[1] * self.data.itemsize, _PAGE)
+        if self._read >= RELEASE_BYTES:
+            self.release()
+        return out
+
+    def release(self) -> None:
+        """Drop the pages of the map that this process has read (a later read takes them from the page cache)."""
+        self._read = 0
+        handle = getattr(self.data, "_mmap", None)
+        if handle is not None and hasattr(handle, "madvise"):
+            handle.madvise(mmap.MADV_DONTNEED)
 
 
 def mean_std(arrays: Iterable[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -126,22 +157,54 @@ class Windows:
 
     def __getitem__(self, idx: np.ndarray) -> np.ndarray:
         rows = self.starts[np.asarray(idx)][:, None] + np.arange(self.length)
-        return np.asarray(self.store.data[rows])
+        return self.store.gather(rows)
+
+
+class Rows:
+    """The ``(N, D)`` concatenation of a store's segments, gathered on demand: ``rows[idx]`` is ``(len(idx), D)``."""
+
+    def __init__(self, store: SegmentStore):
+        self.store = store
+
+    def __len__(self) -> int:
+        return int(self.store.data.shape[0])
+
+    def __getitem__(self, idx: np.ndarray) -> np.ndarray:
+        return self.store.gather(np.asarray(idx))
+
+
+class Mapped(Sequence[np.ndarray]):
+    """``func(items[i])`` computed when item ``i`` is read, so that a pass holds one result at a time."""
+
+    def __init__(self, func: Callable[[np.ndarray], np.ndarray], items: Sequence[np.ndarray]):
+        self.func, self.items = func, items
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        return self.func(self.items[i])
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        return (self.func(a) for a in self.items)
 
 
 def stream_arrays(segments: Sequence[Segment], rep: PoseRepresentation, folder: pathlib.Path, *,
-                  audio_recipe: str | None, words: str | None,
-                  timing: bool = True) -> tuple[SegmentStore, SegmentStore, SegmentArrays]:
+                  audio_recipe: str | None, words: str | None, timing: bool = True,
+                  speech: Callable[[SegmentArrays, Segment], np.ndarray] | None = None,
+                  ) -> tuple[SegmentStore, SegmentStore, SegmentArrays]:
     """:func:`~evalsuite.generators.reimpl.corpus_arrays` one segment at a time, written to ``folder``: the
-    speech features ``(T, A + X)`` and poses ``(T, D)`` as two stores (``speech.npy``, ``poses.npy``), and the
-    first segment's arrays (for the feature sizes)."""
-    speech, poses = SegmentStore(folder / "speech.npy"), SegmentStore(folder / "poses.npy")
+    speech features ``(T, A + X)`` (or ``speech(arrays, segment)``) and poses ``(T, D)`` as two stores
+    (``speech.npy``, ``poses.npy``), and the first segment's arrays (for the feature sizes)."""
+    speech_store, poses = SegmentStore(folder / "speech.npy"), SegmentStore(folder / "poses.npy")
     first: SegmentArrays | None = None
     for seg in segments:
         arrays = corpus_arrays([seg], rep, audio_recipe=audio_recipe, words=words, timing=timing)[0]
         first = first or arrays
-        speech.append(arrays.speech)
+        speech_store.append(arrays.speech if speech is None else speech(arrays, seg))
         poses.append(arrays.poses)
     if first is None:
         raise ValueError("no segment to train on")
-    return speech.finish(), poses.finish(), first
+    return speech_store.finish(), poses.finish(), first

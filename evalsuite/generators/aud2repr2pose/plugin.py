@@ -9,6 +9,7 @@ post-processing (moving average, 1-euro) applies to the output with ``evalsuite 
 from __future__ import annotations
 
 import pathlib
+import tempfile
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
@@ -24,6 +25,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
+from evalsuite.generators.datastream import stream_arrays
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
@@ -133,12 +135,14 @@ class _Aud2(Generator):
         rep = PoseRepresentation.from_motion(train[0].load_motion(), st["representation"])
         recipe = "mfcc_kucherenko"
         prosody = st["features"] == "mfcc+prosody"
-        tr = corpus_arrays(train, rep, audio_recipe=recipe, words=None)
+        data = tempfile.TemporaryDirectory(prefix=f"{self.system}-data-")  # features memory-mapped, not in memory
+        speech, poses, _ = stream_arrays(train, rep, pathlib.Path(data.name), audio_recipe=recipe, words=None,
+                                         speech=(lambda a, seg: self._prosody(a.speech, seg.audio, rep.fps))
+                                         if prosody else None)
         va = corpus_arrays(val, rep, audio_recipe=recipe, words=None) if val else []
-        speech = [self._prosody(a.speech, seg.audio, rep.fps) if prosody else a.speech for a, seg in zip(tr, train)]
         vspeech = [self._prosody(a.speech, seg.audio, rep.fps) if prosody else a.speech for a, seg in zip(va, val)]
         _, overrides = SYSTEMS[self.system]
-        model = train_system(self.system, speech, [a.poses for a in tr],
+        model = train_system(self.system, speech, poses, data_dir=pathlib.Path(data.name),
                              config={**overrides, "form": st["form"], "width": st["width"],
                                      "velocity_target": st["velocity_target"], "past_frames": st["past_frames"]},
                              code_dim=st["code_dim"], dae_epochs=st["dae_epochs"], epochs=st["epochs"],
@@ -148,6 +152,7 @@ class _Aud2(Generator):
                              scale_floor=st["scale_floor"], lr_schedule=st["lr_schedule"], ema=st["ema"],
                              validate_on=st["validate_on"], dae_velocities=st["dae_inputs"] == "poses+velocities",
                              on_epoch=progress)
+        data.cleanup()
         rep.save(out_dir)
         sha = save_state(out_dir, "speech_net.pt", model.speech_net)
         if model.dae is not None:
@@ -157,7 +162,7 @@ class _Aud2(Generator):
         write_json(out_dir / "settings.json", {**st, "system": self.system, "audio_recipe": recipe,
                                                "net": model.speech_net.config.to_dict(),
                                                "pose_dim": rep.dim})
-        return TrainingResult(out_dir, model.history, {"weights_sha256": sha, "train_segments": len(tr)})
+        return TrainingResult(out_dir, model.history, {"weights_sha256": sha, "train_segments": len(train)})
 
     @staticmethod
     def _prosody(mfcc: np.ndarray, audio: Any, fps: float) -> np.ndarray:
