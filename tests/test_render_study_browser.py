@@ -1,20 +1,23 @@
 """Stimulus sets of each body style (stick, mannequin, character) rendered with ``evalsuite render stimuli``, built
 into a pairwise study with ``evalsuite study build`` and played in headless Chromium: every video on a participant's
-page reaches ``readyState >= 3``, plays past 0.3 s, has the render size and no media error, and the admin page and
-the raw export say the embodiment the manifest records (style, character, framing, face)."""
+page reaches ``readyState >= 3``, plays past 0.3 s, has the render size and no media error, and shows the served
+file's picture at that time (drawn on a canvas, compared with ffmpeg's decoding); the admin page and the raw export
+say the embodiment the manifest records (style, character, framing, face)."""
 from __future__ import annotations
 
 import csv
+import functools
 import json
 import os
 import time
 
+import numpy as np
 import pytest
 import study_helpers as h
 import yaml
 from browser_helpers import Server, chromium
 from click.testing import CliRunner
-from render_helpers import RATE, genea2023_standin
+from render_helpers import RATE, decode, genea2023_standin
 from test_study_browser import ARGS
 
 from evalsuite.cli import main as evalsuite_cli
@@ -26,7 +29,7 @@ from study_app.cli import study as study_cli
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 STYLES = ("stick", "mannequin", "character")
-WIDTH, HEIGHT, SECONDS = 160, 120, 1.0
+WIDTH, HEIGHT, SECONDS, FPS = 160, 120, 1.0, 30
 SEGMENTS = ("seg01", "seg02")
 CONDITIONS = {"natural": 1.0, "system": 0.5}   # condition -> scale of the motion's rotations
 EMBODIMENT = {"stick": "stick body; framing above-knees; face visible",
@@ -55,22 +58,22 @@ pages:
     text: Thank you for taking part.
 """
 
-# what the test reads from the videos, with the share of each one's current frame that differs from its top-left
-# pixel (the background), i.e. the body drawn: a plain expression (no string predicate: the pages send a CSP)
-STATE = ("(() => { const figure = v => { const c = document.createElement('canvas'); c.width = v.videoWidth; "
-         "c.height = v.videoHeight; if (!c.width) return 0; const g = c.getContext('2d'); g.drawImage(v, 0, 0); "
-         "const d = g.getImageData(0, 0, c.width, c.height).data; let n = 0; for (let i = 0; i < d.length; i += 4) "
-         "{ n += Math.abs(d[i] - d[0]) + Math.abs(d[i + 1] - d[1]) + Math.abs(d[i + 2] - d[2]) > 60; } "
-         "return n / (d.length / 4); }; "
-         "return Array.from(document.querySelectorAll('video[data-slot]')).map(v => ({slot: Number(v.dataset.slot), "
-         "ready: v.readyState, time: v.currentTime, width: v.videoWidth, height: v.videoHeight, "
-         "error: v.error ? v.error.code : null, figure: figure(v)})); })()")
+# what the test reads from the videos: plain expressions evaluated from Python (no string predicates, which the
+# pages' Content Security Policy refuses)
+STATE = ("Array.from(document.querySelectorAll('video[data-slot]')).map(v => ({ready: v.readyState, "
+         "time: v.currentTime, width: v.videoWidth, height: v.videoHeight, error: v.error ? v.error.code : null}))")
+# the frame a video shows, drawn on a canvas, as grey levels (0.299 R + 0.587 G + 0.114 B), and its time
+FRAME = ("(() => {{ const v = document.querySelector('video[data-slot=\"{slot}\"]'); const c = document.createElement("
+         "'canvas'); c.width = v.videoWidth; c.height = v.videoHeight; const g = c.getContext('2d'); "
+         "g.drawImage(v, 0, 0); const t = v.currentTime; const d = g.getImageData(0, 0, c.width, c.height).data; "
+         "const grey = []; for (let i = 0; i < d.length; i += 4) grey.push(0.299 * d[i] + 0.587 * d[i + 1] + "
+         "0.114 * d[i + 2]); return {{time: t, grey: grey}}; }})()")
 
 
 def render_set(root, style):
     """Motion of 2 conditions x 2 segments on the GENEA 2023 stand-in skeleton (a skeleton every style draws, the
     character through its shipped joint map), speech, a stimuli config, and ``evalsuite render stimuli`` on it."""
-    base = genea2023_standin(SECONDS)
+    base = genea2023_standin(SECONDS, FPS)
     for cond, scale in CONDITIONS.items():
         for k, seg in enumerate(SEGMENTS):
             values = base.values.copy()
@@ -81,7 +84,7 @@ def render_set(root, style):
         write_wav(root / f"{seg}.wav", speech_like_audio(SECONDS, RATE, seed=k), RATE)
     cfg = {"output": "stim", "segments": list(SEGMENTS), "audio": "{segment}.wav",
            "conditions": {c: f"{c}/{{segment}}.bvh" for c in CONDITIONS},
-           "render": {"width": WIDTH, "height": HEIGHT, "fps": 30, "msaa": 0, "style": style, **RENDER[style]}}
+           "render": {"width": WIDTH, "height": HEIGHT, "fps": FPS, "msaa": 0, "style": style, **RENDER[style]}}
     (root / "stimuli.yaml").write_text(yaml.safe_dump(cfg))
     res = CliRunner().invoke(evalsuite_cli, ["render", "stimuli", str(root / "stimuli.yaml")])
     assert res.exit_code == 0, res.output
@@ -124,9 +127,16 @@ def served(sets, tmp_path):
         s.stop()
 
 
+@functools.cache
+def decoded_grey(path):
+    """The frames of a video file as ffmpeg decodes them, in grey levels ``(T, H, W)``."""
+    _, frames = decode(path)
+    return frames.astype(float) @ np.array([0.299, 0.587, 0.114])
+
+
 def play_every_video(page):
     """Click each video's play button and poll (from Python) until it has played past 0.3 s; returns each
-    slot's state at that moment."""
+    slot's state at that moment, with the frame it shows then."""
     seen = {}
     for k in range(page.locator("video[data-slot]").count()):
         page.click(f"button.play[data-slot='{k}']")
@@ -136,6 +146,8 @@ def play_every_video(page):
             if state["time"] > 0.3 or state["error"] is not None or time.monotonic() > deadline:
                 break
             page.wait_for_timeout(50)
+        frame = page.evaluate(FRAME.format(slot=k))
+        state.update(frame_time=frame["time"], grey=np.reshape(frame["grey"], (state["height"], state["width"])))
         seen[k] = state
         page.wait_for_selector(f".status[data-slot='{k}'].ok")   # played to the end, as the study requires
     return seen
@@ -153,6 +165,8 @@ def test_stimulus_set_plays_in_a_study(style, sets, served, browser):
     page.goto(f"{server.url}/start/styles-{style}")
     pages = 0
     while page.locator("#page-data").count():
+        sid = page.url.split("/s/")[1].split("/")[0]
+        spec = h.plan_pages(server.app, sid)[json.loads(page.text_content("#page-data"))["index"]]
         states = play_every_video(page)
         assert len(states) == 2
         for k, s in states.items():
@@ -160,7 +174,16 @@ def test_stimulus_set_plays_in_a_study(style, sets, served, browser):
             assert s["ready"] >= 3, f"{style} slot {k}: readyState {s['ready']}"
             assert s["time"] > 0.3, f"{style} slot {k}: stopped at {s['time']:.2f} s"
             assert (s["width"], s["height"]) == (WIDTH, HEIGHT)
-            assert s["figure"] > 0.02, f"{style} slot {k}: a blank frame"
+            # the picture is the served file's at that time, as ffmpeg decodes it (within 3 frames)
+            file = spec["a"] if (k == 0) == (spec["position_a"] == "left") else spec["b"]
+            frames = decoded_grey(str(sets[style].parent / "stim" / file))
+            at = int(s["frame_time"] * FPS)
+            diff = min(np.abs(frames[i] - s["grey"]).mean() for i in range(max(at - 3, 0), min(at + 4, len(frames))))
+            assert diff < 1.5, f"{style} slot {k}: the frame at {s['frame_time']:.2f} s differs by {diff:.2f} levels"
+            # ... which is not the first frame any more (measured: 4.5 to 10 levels from it, 0.2 to 0.9 from the
+            # file's frame at that time), and not blank
+            assert np.abs(frames[0] - s["grey"]).mean() > diff + 2.0, f"{style} slot {k}: still the first frame"
+            assert np.ptp(s["grey"]) > 50, f"{style} slot {k}: a blank frame"
         page.check("input[name='q-human_likeness'][value='left']")
         page.wait_for_selector("#next:not([disabled])")
         with page.expect_navigation():
