@@ -8,6 +8,8 @@ block of frames at once (vectorised over frames, joints and template vertices).
 """
 from __future__ import annotations
 
+import functools
+import pathlib
 import re
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -96,6 +98,38 @@ def head_marker_centres(positions: np.ndarray, head: int, head_parent: int, radi
     return h + 0.6 * radius * d
 
 
+TEMPLATES_FILE = pathlib.Path(__file__).resolve().parent / "data" / "stick_templates.npz"
+DEFAULT_TESSELLATION = (1, 10)   # FigureStyle's sphere_subdivisions, cylinder_sections: the stored templates
+
+
+def templates_from_trimesh(sphere_subdivisions: int, cylinder_sections: int) -> dict[str, np.ndarray]:
+    """The stick figure's unit parts from trimesh: joint sphere ``s*`` (``icosphere(subdivisions)``), head
+    sphere ``h*`` (``icosphere(subdivisions + 2)``) and bone cylinder ``c*`` (radius 1, z from 0 at the parent to
+    1 at the child); ``*v`` vertices (V, 3), ``*n`` vertex normals (V, 3), ``*f`` faces (K, 3)."""
+    import trimesh
+
+    cyl = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=cylinder_sections)
+    cyl.apply_translation([0.0, 0.0, 0.5])
+    out = {}
+    for key, mesh in (("s", trimesh.creation.icosphere(subdivisions=sphere_subdivisions, radius=1.0)),
+                      ("h", trimesh.creation.icosphere(subdivisions=sphere_subdivisions + 2, radius=1.0)),
+                      ("c", cyl)):
+        out[key + "v"], out[key + "n"] = np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals)
+        out[key + "f"] = np.asarray(mesh.faces)
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def stick_templates(sphere_subdivisions: int, cylinder_sections: int) -> dict[str, np.ndarray]:
+    """:func:`templates_from_trimesh`, read from ``renderers/data/stick_templates.npz`` for the default
+    tessellation (written with ``np.savez`` from that function; a test checks they agree): a rendering command
+    then needs neither trimesh nor scipy, about a second of its start."""
+    if (sphere_subdivisions, cylinder_sections) == DEFAULT_TESSELLATION and TEMPLATES_FILE.is_file():
+        with np.load(TEMPLATES_FILE) as data:
+            return {k: data[k] for k in data.files}
+    return templates_from_trimesh(sphere_subdivisions, cylinder_sections)
+
+
 @dataclass(frozen=True)
 class FigureStyle:
     """How the figure looks. Radii are fractions of the figure's size (see :func:`body_size`)."""
@@ -141,8 +175,6 @@ class FigureMesh:
     """
 
     def __init__(self, joint_names, parents, style: FigureStyle, size: float, rest_positions=None):
-        import trimesh  # here: importing this module (every renderer does) stays free of trimesh and scipy
-
         self.style = style
         names = list(joint_names)
         parents = np.asarray(parents, dtype=np.int64)
@@ -177,25 +209,17 @@ class FigureMesh:
 
         # Joints are small on screen: a once-subdivided icosahedron (80 faces) looks round
         # there; the head marker is larger and gets a finer sphere.
-        sphere = trimesh.creation.icosphere(subdivisions=style.sphere_subdivisions, radius=1.0)
-        head_sphere = trimesh.creation.icosphere(subdivisions=style.sphere_subdivisions + 2, radius=1.0)
-        cyl = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=style.cylinder_sections)
-        cyl.apply_translation([0.0, 0.0, 0.5])     # from z=0 (parent) to z=1 (child)
-        self._sv = np.asarray(sphere.vertices)
-        self._sn = np.asarray(sphere.vertex_normals)
-        self._hv = np.asarray(head_sphere.vertices)
-        self._hn = np.asarray(head_sphere.vertex_normals)
-        self._cv = np.asarray(cyl.vertices)
-        self._cn = np.asarray(cyl.vertex_normals)
+        t = stick_templates(style.sphere_subdivisions, style.cylinder_sections)
+        self._sv, self._sn, self._hv, self._hn, self._cv, self._cn = t["sv"], t["sn"], t["hv"], t["hn"], t["cv"], t["cn"]
         nb = len(child)
         self.head = head_index(names) if style.head_marker else None
         self.head_parent = int(parents[self.head]) if self.head is not None else -1
         sv, hv, cv = len(self._sv), len(self._hv) if self.head is not None else 0, len(self._cv)
         # vertex layout: n joint spheres, then the head marker, then nb bones
-        faces = [(np.asarray(sphere.faces)[None] + (np.arange(n) * sv)[:, None, None]).reshape(-1, 3)]
+        faces = [(t["sf"][None] + (np.arange(n) * sv)[:, None, None]).reshape(-1, 3)]
         if self.head is not None:
-            faces.append(np.asarray(head_sphere.faces) + n * sv)
-        faces.append((np.asarray(cyl.faces)[None] + (n * sv + hv + np.arange(nb) * cv)[:, None, None]).reshape(-1, 3))
+            faces.append(t["hf"] + n * sv)
+        faces.append((t["cf"][None] + (n * sv + hv + np.arange(nb) * cv)[:, None, None]).reshape(-1, 3))
         self.faces = np.concatenate(faces).astype(np.uint32)
         parts = [np.repeat(colors[sides], sv, axis=0)]
         if self.head is not None:

@@ -120,3 +120,17 @@ def test_grid_layout_places_panels_under_captions():
         assert np.all(frame[y:y + 30, x:x + 40] == 10 * (k + 1))
         assert frame[y - 10:y, x:x + 40].min() < 128    # caption text drawn in the strip
     assert np.all(frame[44 + 10:, 88:] == 255), "the unused sixth cell is background"
+
+
+def test_stored_stick_templates_are_trimeshs_parts():
+    """The stick figure's default parts are read from renderers/data (no trimesh import); they must be exactly
+    what trimesh makes, and other tessellations still come from trimesh."""
+    from renderers.figure import DEFAULT_TESSELLATION, FigureStyle, stick_templates, templates_from_trimesh
+
+    assert (FigureStyle().sphere_subdivisions, FigureStyle().cylinder_sections) == DEFAULT_TESSELLATION
+    stored, made = stick_templates(*DEFAULT_TESSELLATION), templates_from_trimesh(*DEFAULT_TESSELLATION)
+    assert sorted(stored) == sorted(made)
+    for key in made:
+        np.testing.assert_allclose(stored[key], made[key], rtol=0, atol=1e-12, err_msg=key)
+    finer = stick_templates(2, 16)
+    assert len(finer["sv"]) == 162 and len(finer["cf"]) == 64
