@@ -16,13 +16,22 @@ Targets (issues 5 and 36): stick figure >= 10x the matplotlib peer; mannequin >=
 Each renderer runs ``--rounds`` times alternately; the best round counts (the machine is
 shared, so the best round is the least disturbed one).
 
+``--stimuli N`` instead times a study's stimulus set (issue 36: "100 ten-second stimuli with --jobs 2"): N
+clips of ``--stimulus-seconds`` each (windows of the same clip, two conditions per segment when N is even,
+synthetic speech muxed as AAC) rendered by the real ``evalsuite render stimuli CONFIG --jobs J`` command in a
+fresh process, in ``--stimulus-style``; it prints the wall time, seconds per stimulus, x real time (seconds of
+video per second of wall time) and how many worker processes were busy at once (sampled from /proc every
+0.2 s), which shows whether ``--jobs`` really renders in parallel.
+
     python benchmarks/bench_render.py [--frames 300] [--rounds 2]
+    python benchmarks/bench_render.py --stimuli 100 --stimulus-seconds 10 --jobs 2 --stimulus-style mannequin
 """
 from __future__ import annotations
 
 import argparse
 import os
 import pathlib
+import resource
 import subprocess
 import sys
 import tempfile
@@ -105,11 +114,97 @@ def matplotlib_3d(motion, out, axes_visible: bool = True) -> float:
     return time.perf_counter() - t0
 
 
+def _cpu_ticks(pid: int) -> int | None:
+    """utime + stime of a process in clock ticks (/proc/PID/stat), None when it is gone."""
+    try:
+        fields = pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return int(fields[11]) + int(fields[12])
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(c) for c in pathlib.Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+def stimulus_set(n: int, seconds: float, jobs: int, style: str) -> None:
+    """Time ``evalsuite render stimuli --jobs JOBS`` on ``n`` stimuli of ``seconds`` each (see the module doc)."""
+    import yaml
+
+    from renderers.audio import speech_like_audio, write_wav
+
+    source = load_motion(sample_path("mocapbank"))
+    length = source.n_frames / source.fps
+    if seconds > length:
+        raise SystemExit(f"--stimulus-seconds {seconds:g}: the clip lasts {length:.1f} s")
+    root = pathlib.Path(tempfile.mkdtemp(prefix="bench_stimuli_"))
+    save_motion(source, root / "clip.npz")
+    write_wav(root / "speech.wav", speech_like_audio(length, 16000, seed=1), 16000)
+    conditions = ["a", "b"] if n % 2 == 0 else ["a"]
+    n_segments = n // len(conditions)
+    room = length - seconds
+    segments = {}
+    for k in range(n_segments):   # windows spread over the clip, so the segments' cameras differ
+        start = round(room * ((k * 0.37) % 1.0), 3)
+        segments[f"seg{k:03d}"] = {"start": start, "end": start + seconds}
+    config = {"output": "out", "segments": segments, "conditions": {c: "clip.npz" for c in conditions},
+              "audio": "speech.wav", "render": {"width": W, "height": H, "style": style}}
+    (root / "stimuli.yaml").write_text(yaml.safe_dump(config))
+    cmd = [sys.executable, "-m", "evalsuite", "render", "stimuli", str(root / "stimuli.yaml"), "--jobs", str(jobs)]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    ticks: dict[int, int] = {}
+    busy_counts, workers = [], set()
+    while proc.poll() is None:
+        time.sleep(0.2)
+        busy = 0
+        for child in _children(proc.pid):
+            now = _cpu_ticks(child)
+            if now is None:
+                continue
+            if child in ticks and now - ticks[child] >= 0.05 * os.sysconf("SC_CLK_TCK"):   # >= 25 % of a core
+                busy += 1
+                workers.add(child)
+            ticks[child] = now
+        busy_counts.append(busy)
+    wall = time.perf_counter() - t0
+    output = proc.stdout.read() if proc.stdout else ""
+    if proc.returncode != 0:
+        raise SystemExit(f"render stimuli failed ({proc.returncode}):\n{output[-2000:]}")
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    load = os.getloadavg()
+    video = n * seconds
+    print(f"Stimulus set: {n} stimuli of {seconds:g} s ({len(conditions)} condition(s) x {n_segments} segments), "
+          f"{W}x{H}, style {style}, speech muxed, evalsuite render stimuli --jobs {jobs} in a fresh process")
+    print(f"CPU: {os.cpu_count()} cores, load average {load[0]:.2f} / {load[1]:.2f} (shared machine)")
+    print(f"wall {wall:.1f} s = {wall / n:.2f} s per stimulus = {video / wall:.2f}x real time "
+          f"({video:g} s of video); CPU {cpu:.1f} s = {cpu / wall:.2f} cores busy on average")
+    peak = max(busy_counts, default=0)
+    print(f"worker processes busy at once (sampled every 0.2 s): at most {peak}, "
+          f"{sum(b == jobs for b in busy_counts) / max(len(busy_counts), 1):.0%} of samples with {jobs}; "
+          f"{len(workers)} worker process(es) seen")
+    if n and video / wall > 0:
+        print(f"extrapolated: 100 ten-second stimuli in {100 * 10 / (video / wall) / 60:.1f} min at this rate")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=300, help="frames to render (at 30 fps)")
-    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--rounds", type=int, default=2, help="rounds per renderer; the best counts")
+    ap.add_argument("--stimuli", type=int, default=0,
+                    help="time a stimulus set of this many clips through 'evalsuite render stimuli' instead")
+    ap.add_argument("--stimulus-seconds", type=float, default=10.0, help="length of each stimulus (--stimuli)")
+    ap.add_argument("--jobs", type=int, default=2, help="--jobs of 'evalsuite render stimuli' (--stimuli)")
+    ap.add_argument("--stimulus-style", default="mannequin", help="body style of the stimuli (--stimuli)")
     args = ap.parse_args()
+    if args.stimuli:
+        stimulus_set(args.stimuli, args.stimulus_seconds, args.jobs, args.stimulus_style)
+        return
     source = load_motion(sample_path("mocapbank"))
     motion = prepare_motions([cut(source, 0.0, args.frames / source.fps)], RenderSettings(width=W, height=H))[0]
     n = motion.n_frames
