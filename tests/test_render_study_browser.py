@@ -2,7 +2,8 @@
 into a pairwise study with ``evalsuite study build`` and played in headless Chromium: every video on a participant's
 page reaches ``readyState >= 3``, plays past 0.3 s, has the render size and no media error, and shows the served
 file's picture at that time (drawn on a canvas, compared with ffmpeg's decoding); the admin page and the raw export
-say the embodiment the manifest records (style, character, framing, face)."""
+say the embodiment the manifest records (style, character, framing, face). The mannequin's block is muted, as the
+GENEA Leaderboard's realism pairs: its pages play the video-only copies ``study build`` derives, with no sound."""
 from __future__ import annotations
 
 import csv
@@ -35,6 +36,8 @@ CONDITIONS = {"natural": 1.0, "system": 0.5}   # condition -> scale of the motio
 EMBODIMENT = {"stick": "stick body; framing above-knees; face visible",
               "mannequin": "mannequin body; framing above-knees; face blank",
               "character": "character body; character mpfb2_neutral.glb; framing upper; face blank"}
+# the mannequin's study is muted as the GENEA Leaderboard's realism pairs: study build derives video-only copies
+MUTED = {"stick": False, "mannequin": True, "character": False}
 RENDER = {"stick": {"framing": "above-knees"}, "mannequin": {"framing": "above-knees", "face": "blank"},
           "character": {"framing": "upper", "face": "blank"}}
 
@@ -53,6 +56,7 @@ pages:
     questions:
       - {{id: human_likeness, text: "In which video does the character gesture more like a real person?"}}
     pages: 2
+    muted: {muted}
   - type: finish
     id: finish
     text: Thank you for taking part.
@@ -61,7 +65,8 @@ pages:
 # what the test reads from the videos: plain expressions evaluated from Python (no string predicates, which the
 # pages' Content Security Policy refuses)
 STATE = ("Array.from(document.querySelectorAll('video[data-slot]')).map(v => ({ready: v.readyState, "
-         "time: v.currentTime, width: v.videoWidth, height: v.videoHeight, error: v.error ? v.error.code : null}))")
+         "time: v.currentTime, width: v.videoWidth, height: v.videoHeight, error: v.error ? v.error.code : null, "
+         "audio: v.webkitAudioDecodedByteCount}))")
 # the frame a video shows, drawn on a canvas, as grey levels (0.299 R + 0.587 G + 0.114 B), and its time
 FRAME = ("(() => {{ const v = document.querySelector('video[data-slot=\"{slot}\"]'); const c = document.createElement("
          "'canvas'); c.width = v.videoWidth; c.height = v.videoHeight; const g = c.getContext('2d'); "
@@ -89,7 +94,7 @@ def render_set(root, style):
     res = CliRunner().invoke(evalsuite_cli, ["render", "stimuli", str(root / "stimuli.yaml")])
     assert res.exit_code == 0, res.output
     study = root / "study.yaml"
-    study.write_text(STUDY_YAML.format(style=style))
+    study.write_text(STUDY_YAML.format(style=style, muted=str(MUTED[style]).lower()))
     res = CliRunner().invoke(study_cli, ["build", str(study)])
     assert res.exit_code == 0, res.output
     return study
@@ -150,6 +155,7 @@ def play_every_video(page):
         state.update(frame_time=frame["time"], grey=np.reshape(frame["grey"], (state["height"], state["width"])))
         seen[k] = state
         page.wait_for_selector(f".status[data-slot='{k}'].ok")   # played to the end, as the study requires
+        state["audio"] = page.evaluate(STATE)[k]["audio"]
     return seen
 
 
@@ -174,8 +180,11 @@ def test_stimulus_set_plays_in_a_study(style, sets, served, browser):
             assert s["ready"] >= 3, f"{style} slot {k}: readyState {s['ready']}"
             assert s["time"] > 0.3, f"{style} slot {k}: stopped at {s['time']:.2f} s"
             assert (s["width"], s["height"]) == (WIDTH, HEIGHT)
+            # speech decoded, except in the muted block, whose video-only copies carry none
+            assert (s["audio"] == 0) == MUTED[style], f"{style} slot {k}: {s['audio']} bytes of sound decoded"
             # the picture is the served file's at that time, as ffmpeg decodes it (within 3 frames)
             file = spec["a"] if (k == 0) == (spec["position_a"] == "left") else spec["b"]
+            assert file.startswith("derived/") == MUTED[style]
             frames = decoded_grey(str(sets[style].parent / "stim" / file))
             at = int(s["frame_time"] * FPS)
             diff = min(np.abs(frames[i] - s["grey"]).mean() for i in range(max(at - 3, 0), min(at + 4, len(frames))))
