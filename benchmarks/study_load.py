@@ -52,6 +52,7 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
+TIMING_ENV = "EVALSUITE_TIMING_LOG"
 ADMIN = "bench-admin-token-" + secrets.token_hex(8)
 SECRET = "bench-secret-" + secrets.token_hex(16)
 PAGE_DATA_RE = re.compile(r'<script id="page-data" type="application/json">(.*?)</script>', re.S)
@@ -226,10 +227,13 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
     st = load_study(study)
     init_db(make_engine(db_url), st, build_plans(st))     # like `evalsuite study build --db`
     media_log = os.path.join(os.path.dirname(study), f"media-{secrets.token_hex(4)}.log")
-    server = Gunicorn({"EVALSUITE_STUDY": study, "EVALSUITE_DATABASE_URL": db_url, "EVALSUITE_SECRET_KEY": SECRET,
-                       "EVALSUITE_ADMIN_TOKEN": ADMIN, "EVALSUITE_TRUSTED_PROXIES": "1",
-                       "EVALSUITE_MEDIA_SERVER": "nginx", "EVALSUITE_MEDIA_ACCESS_LOG": media_log},
-                      args.workers, args.threads)
+    env = {"EVALSUITE_STUDY": study, "EVALSUITE_DATABASE_URL": db_url, "EVALSUITE_SECRET_KEY": SECRET,
+           "EVALSUITE_ADMIN_TOKEN": ADMIN, "EVALSUITE_TRUSTED_PROXIES": "1",
+           "EVALSUITE_MEDIA_SERVER": "nginx", "EVALSUITE_MEDIA_ACCESS_LOG": media_log}
+    timing_log = os.path.join(os.path.dirname(study), f"timing-{secrets.token_hex(4)}.log") if args.timing else None
+    if timing_log:
+        env[TIMING_ENV] = timing_log
+    server = Gunicorn(env, args.workers, args.threads)
     nginx = Nginx(f"127.0.0.1:{server.port}", stim, media_log, workers=args.nginx_workers)
     server.start()
     nginx.start()
@@ -279,6 +283,11 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
     finished = sum(1 for s in raw["sessions"] if s["status"] == "finished")
     lat = {f"{kind}_p{q}": pct(stats[kind], q) for kind in ("enter", "page", "answer", "video") for q in (50, 95, 99)}
     lat.update({f"nginx_{kind}_p{q}": pct(seen[kind], q) for kind in ("enter", "page", "answer") for q in (50, 99)})
+    lat.update({f"upstream_{kind}_p{q}": pct(seen["upstream_" + kind], q) for kind in ("enter", "page", "answer")
+                for q in (50, 99)})
+    if timing_log:
+        from study_app.timing import summarise
+        lat["timing"] = summarise(timing_log)
     return {"name": name, "participants": participants, "wall_s": wall, "finished": finished, "errors": errors,
             "crash": crash, "retries": sum(c.retries for c in clients), "server_cpu_s": server_cpu,
             "retry_reasons": sum((c.retry_reasons for c in clients), collections.Counter()),
@@ -300,6 +309,8 @@ def nginx_times(path):
                     else "page" if method == "GET" and re.fullmatch(r"/s/[^/]+/", uri) else None)
             if kind:
                 seen[kind].append(seconds)
+                if parts[1] != "-":           # gunicorn's time as nginx saw it: queue + app
+                    seen["upstream_" + kind].append(sum(float(x) for x in parts[1].split(",")))
     return seen
 
 
@@ -349,6 +360,14 @@ def report(r):
         print(f"{label:22s} p50 {r[kind + '_p50']:6.0f} ms   p95 {r[kind + '_p95']:6.0f} ms   "
               f"p99 {r[kind + '_p99']:6.0f} ms" + (f"   (nginx's own time p50 {r['nginx_' + kind + '_p50']:.0f} ms, "
                                                  f"p99 {r['nginx_' + kind + '_p99']:.0f} ms)" if kind != "video" else ""))
+    if "timing" in r:
+        print("app timing (EVALSUITE_TIMING_LOG; ms; the parts are means over each kind's slowest 1 %):")
+        for kind, t in sorted(r["timing"].items()):
+            up = (f", nginx upstream p50 {r['upstream_' + kind + '_p50']:.0f} p99 {r['upstream_' + kind + '_p99']:.0f}"
+                  if "upstream_" + kind + "_p50" in r else "")
+            print(f"  {kind:7s} n {t['n']:5.0f}  in app p50 {t['p50']:5.0f} p99 {t['p99']:5.0f}{up};  slowest: "
+                  + " ".join(f"{k} {t['slow_' + k]:.0f}" for k in ("wall", "cpu", "lock", "commit", "sql", "pool", "other"))
+                  + f";  write queue held p50 {t['held_p50']:.0f} p99 {t['held_p99']:.0f}")
     print(f"answers acknowledged {r['acknowledged']}, stored {r['stored']}: lost {r['lost']}, "
           f"changed {r['changed']}, duplicated {r['duplicated']}, stored without ack {r['unexpected']}")
     print(f"results.csv rows {r['csv_rows']} (expected {r['csv_rows_expected']}), "
@@ -388,6 +407,9 @@ def main():
     ap.add_argument("--no-kill", action="store_true", help="skip the SIGKILL runs")
     ap.add_argument("--think-min", type=float, default=2.0, help="shortest think time per page, seconds")
     ap.add_argument("--think-max", type=float, default=10.0, help="longest think time per page, seconds")
+    ap.add_argument("--timing", action="store_true",
+                    help="log every request's time inside the app split into CPU, write-lock wait, commit, SQL, pool "
+                         "wait and the rest (study_app.timing; EVALSUITE_TIMING_LOG) and print the breakdown")
     ap.add_argument("--ramp", type=float, default=30.0,
                     help="participants arrive uniformly spread over this many seconds")
     args = ap.parse_args()

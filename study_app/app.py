@@ -8,6 +8,7 @@ from flask import Flask, jsonify, render_template, request
 from flask_wtf.csrf import CSRFError, CSRFProtect
 from jinja2 import ChoiceLoader, FileSystemLoader
 
+from study_app import timing
 from study_app.context import install
 from study_app.definition import Study, load_study
 from study_app.design import default_plans_path, entry_pages, read_plans
@@ -85,6 +86,9 @@ def create_app(config: dict) -> Flask:
         # Behind reverse proxies the client address is in X-Forwarded-For (the per-address limits use it).
         app.config["TRUSTED_PROXIES_SET"] = True
         app.wsgi_app = TrustedProxies(app.wsgi_app, proxies, networks)  # type: ignore[method-assign]
+
+    if timing.enabled():
+        app.wsgi_app = timing.TimingMiddleware(app.wsgi_app, os.environ[timing.ENV])  # type: ignore[method-assign]
 
     # plug-in page kinds may keep their templates outside the package
     folders = [k.template_folder for k in page_kinds().values() if k.template_folder]

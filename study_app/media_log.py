@@ -149,13 +149,16 @@ class MediaLog:
             if not wait:
                 cur.execute("PRAGMA busy_timeout=0")
             try:
+                # the engine's write queue first (study_app.storage.engine); commit() and rollback() leave it
+                lock = getattr(con, "lock_writes", None)
+                if lock is not None and not lock(wait):
+                    return False
                 cur.execute("BEGIN IMMEDIATE")
                 cur.executemany(sql, [(*r[:-1], r[-1].strftime("%Y-%m-%d %H:%M:%S.%f")) for r in rows])
-                cur.execute("COMMIT")
+                con.commit()
                 return True
             except sqlite3.OperationalError as exc:
-                if con.in_transaction:
-                    cur.execute("ROLLBACK")
+                con.rollback()
                 if not wait and "locked" in str(exc):
                     return False
                 raise

@@ -16,6 +16,7 @@ from study_app.media_log import MediaLog
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
 from study_app.served import served_by_page
 from study_app.storage.events import EventLog, add_events, slots_with
+from study_app.storage.pageviews import current_page
 from study_app.storage.tables import Answer, Entry, Event, MediaRequest, PageView, ParticipantSession, Plan, utcnow
 
 __all__ = ["Store", "SubmitStatus"]
@@ -55,6 +56,10 @@ class Store:
         # For reads only: never writes, so on SQLite it does not take the write lock.
         self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
                                         expire_on_commit=False)
+        # For records that acknowledge nothing (a page's first view): on SQLite no fsync of their own
+        # (study_app.storage.engine, "evalsuite_relaxed").
+        self.RelaxedSession = sessionmaker(engine.execution_options(evalsuite_relaxed=True),
+                                           expire_on_commit=False)
         self.is_postgres = engine.dialect.name == "postgresql"
 
     def _locked(self, stmt):
@@ -158,11 +163,15 @@ class Store:
             return self.entry_pages
         return _plan(db, sess).pages
 
-    def _check_expiry(self, db, sess, now):
+    def _expiry_due(self, db, sess, now) -> bool:
+        """Whether the session's plan reservation ran out (and :meth:`release_expired` must run)."""
         if sess.status != "active" or sess.plan_id is None:
-            return
+            return False
         plan = db.get(Plan, sess.plan_id)
-        if plan is not None and plan.status == "reserved" and plan.reserved_until < now:
+        return plan is not None and plan.status == "reserved" and plan.reserved_until < now
+
+    def _check_expiry(self, db, sess, now):
+        if self._expiry_due(db, sess, now):
             self.release_expired(db, sess.study, now)
 
     def load(self, session_id: str):
@@ -184,30 +193,20 @@ class Store:
             return sess, self._pages(db, sess)
 
     def view_current_page(self, session_id: str):
-        """One transaction for a page view: the session, its plan, the current page's first-view
-        record (created now if new, with the autosaved draft) and the slots already played /
-        played to the end. Returns None for an unknown session."""
+        """A page view: the session, its plan, the current page's first-view record (created now if new,
+        with the autosaved draft) and the slots already played / played to the end. Returns None for an
+        unknown session.
+
+        Read without any lock when there is nothing to write (the page was shown before and the reservation
+        holds); otherwise one writing transaction, which skips the fsync (``RelaxedSession``): the first-view
+        time acknowledges nothing to the participant, so a page view never waits behind answers' fsyncs."""
         now = utcnow()
-        with self.Session.begin() as db:
-            sess = db.get(ParticipantSession, session_id)
-            if sess is None:
-                return None
-            self._check_expiry(db, sess, now)
-            pages = self._pages(db, sess)
-            view = None
-            played: dict[str, set] = {"play": set(), "ended": set()}
-            if sess.status == "active":
-                index = sess.current_page
-                view = db.scalars(select(PageView).where(PageView.session_id == session_id,
-                                                         PageView.page_index == index)).first()
-                if view is None:
-                    view = PageView(session_id=session_id, page_index=index, shown_at=now)
-                    db.add(view)
-                for kind, slot in db.execute(select(Event.kind, Event.slot).where(
-                        Event.session_id == session_id, Event.page_index == index,
-                        Event.kind.in_(("play", "ended")))):
-                    played[kind].add(slot)
-            return sess, pages, view, played
+        with self.ReadSession() as db:
+            seen = current_page(self, db, session_id, now, write=False)
+        if seen is not False:
+            return seen
+        with self.RelaxedSession.begin() as db:
+            return current_page(self, db, session_id, now, write=True)
 
     def save_draft(self, session_id: str, page_index: int, draft: dict) -> bool:
         with self.Session.begin() as db:
