@@ -12,6 +12,7 @@ paper's Figure 1: ``ablation=no_phase|no_realism|no_minibatch|no_displacement|ms
 from __future__ import annotations
 
 import pathlib
+import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -26,6 +27,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
+from evalsuite.generators.datastream import SegmentStore
 from evalsuite.generators.joint_presets import ARM_JOINTS, WRIST_JOINTS
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
@@ -122,10 +124,15 @@ class FerstlMogan(Generator):
                 "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR)}
 
     # -- training ------------------------------------------------------------------------------------------
-    def _arrays(self, segs: Sequence[Segment], rep: PoseRepresentation, use_corpus_labels: bool):
+    def _arrays(self, segs: Sequence[Segment], rep: PoseRepresentation, use_corpus_labels: bool,
+                folder: pathlib.Path | None = None):
+        """Speech features, positions and phase classes per segment: lists, or with ``folder`` three
+        memory-mapped stores written one segment at a time (phases as one column)."""
         from evalsuite.generators.ferstl_mogan.phases import corpus_phases, heuristic_phases, to_classes
 
-        speech, poses, phases = [], [], []
+        speech: Any = [] if folder is None else SegmentStore(folder / "speech.npy")
+        poses: Any = [] if folder is None else SegmentStore(folder / "positions.npy")
+        phases: Any = [] if folder is None else SegmentStore(folder / "phases.npy", dtype=np.int64)
         wrists = [rep.joints.index(j) for j in WRIST_JOINTS if j in rep.joints]
         for s in segs:
             motion = s.load_motion()
@@ -138,7 +145,10 @@ class FerstlMogan(Generator):
                 labels = corpus_phases(s.labels, motion.fps, rep.fps, n)
             else:
                 labels = heuristic_phases(pos.reshape(n, -1, 3)[:, wrists], rep.fps)
-            phases.append(to_classes(labels))
+            classes = to_classes(labels)
+            phases.append(classes if folder is None else np.asarray(classes, np.int64).reshape(n, 1))
+        if folder is not None:
+            return speech.finish(), poses.finish(), phases.finish()
         return speech, poses, phases
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
@@ -153,11 +163,12 @@ class FerstlMogan(Generator):
         if not any(j in rep.joints for j in WRIST_JOINTS):
             raise GeneratorError(f"ferstl-mogan needs a wrist ({'/'.join(WRIST_JOINTS)}) among the modelled joints")
         source = "corpus" if st["phase_labels"] == "corpus" and all(s.labels for s in (*train, *val)) else "heuristic"
-        speech, poses, phases = self._arrays(train, rep, source == "corpus")
+        data = tempfile.TemporaryDirectory(prefix="ferstl-mogan-data-")  # features memory-mapped, not in memory
+        speech, poses, phases = self._arrays(train, rep, source == "corpus", pathlib.Path(data.name))
         held = val if val else train
         vspeech, vposes, vphases = self._arrays(held, rep, source == "corpus")
         arm = [3 * rep.joints.index(j) + k for j in ARM_JOINTS if j in rep.joints for k in range(3)]
-        config = MoganConfig(speech_dim=speech[0].shape[1], pose_dim=rep.dim, arm_dim=len(arm),
+        config = MoganConfig(speech_dim=speech.width, pose_dim=rep.dim, arm_dim=len(arm),
                              noise_dim=st["noise_dim"], width=st["width"],
                              classifier_width=st["discriminator_width"],
                              discriminator_width=st["discriminator_width"])
@@ -170,7 +181,9 @@ class FerstlMogan(Generator):
                              discriminator_learning_rate=st["discriminator_learning_rate"],
                              discriminators=ABLATIONS[st["ablation"]], scale_floor=st["scale_floor"])
         model = train_mogan(speech, poses, phases, arm, config, stages, seed=seed, val=(vspeech, vposes, vphases),
-                            budget_seconds=budget_seconds(budget_minutes), on_step=progress)
+                            budget_seconds=budget_seconds(budget_minutes), on_step=progress,
+                            data_dir=pathlib.Path(data.name))
+        data.cleanup()
         rep.save(out_dir)
         sha = save_state(out_dir, "generator.pt", model.generator)
         save_state(out_dir, "phase_classifier.pt", model.classifier)

@@ -17,10 +17,15 @@ With ``budget_seconds`` each stage must end by a cumulative share of the budget 
 classifier 15 %, MSE pre-training to 45 %, discriminator pre-training to 55 %, adversarial training to 100 %;
 time a stage leaves unused goes to the later ones); a stage that reaches its deadline stops, the next starts,
 and its last history row says ``"stopped": "time budget"`` (the names are in ``TrainedMogan.stopped``).
+
+The training split is memory-mapped (:mod:`evalsuite.generators.datastream`, batches gathered from the maps,
+statistics one segment at a time), so that memory does not grow with hours of corpus.
 """
 from __future__ import annotations
 
 import copy
+import pathlib
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -30,6 +35,8 @@ import torch
 from torch import nn
 
 from evalsuite.generators import checkpoints
+from evalsuite.generators.datastream import SegmentStore, mean_std
+from evalsuite.generators.ferstl_mogan.data import Sequences, sequences
 from evalsuite.generators.ferstl_mogan.net import (
     Generator,
     MinibatchDiscriminator,
@@ -95,16 +102,6 @@ def weighted_f1(true: np.ndarray, pred: np.ndarray, n_classes: int) -> float:
     return float(score / max(total, 1))
 
 
-def _sequences(arrays: Sequence[np.ndarray], length: int) -> tuple[np.ndarray, np.ndarray]:
-    """Consecutive non-overlapping windows, and for each whether it directly follows the previous one."""
-    out, follows = [], []
-    for a in arrays:
-        for k, s in enumerate(range(0, len(a) - length + 1, length)):
-            out.append(a[s:s + length])
-            follows.append(k > 0)
-    return np.stack(out), np.asarray(follows)
-
-
 def _classifier_input(pos: torch.Tensor, pitch: torch.Tensor, arm: torch.Tensor) -> torch.Tensor:
     a = pos[..., arm]
     vel = torch.diff(a, dim=1, prepend=a[:, :1])
@@ -114,8 +111,20 @@ def _classifier_input(pos: torch.Tensor, pitch: torch.Tensor, arm: torch.Tensor)
 def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases: Sequence[np.ndarray],
                 arm_columns: Sequence[int], config: MoganConfig, stages: MoganStages = MoganStages(), *,
                 seed: int = 0, val: tuple[Sequence[np.ndarray], Sequence[np.ndarray], Sequence[np.ndarray]] | None = None,
-                budget_seconds: float | None = None,
-                on_step: Callable[[dict], None] | None = None) -> TrainedMogan:
+                budget_seconds: float | None = None, on_step: Callable[[dict], None] | None = None,
+                data_dir: pathlib.Path | None = None) -> TrainedMogan:
+    """The paper's stages on segments (lists of arrays or stores); the normalised training sequences are
+    memory-mapped in a temporary folder in ``data_dir`` (default: the system's)."""
+    with tempfile.TemporaryDirectory(prefix="ferstl-mogan-data-", dir=data_dir) as tmp:
+        return _train(speech, positions, phases, arm_columns, config, stages, seed, val, budget_seconds, on_step,
+                      pathlib.Path(tmp))
+
+
+def _train(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases: Sequence[np.ndarray],
+           arm_columns: Sequence[int], config: MoganConfig, stages: MoganStages, seed: int,
+           val: tuple[Sequence[np.ndarray], Sequence[np.ndarray], Sequence[np.ndarray]] | None,
+           budget_seconds: float | None, on_step: Callable[[dict], None] | None,
+           folder: pathlib.Path) -> TrainedMogan:
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     history: list[dict] = []
@@ -136,14 +145,17 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
         if on_step is not None:
             on_step(record)
 
-    allx, ally = np.concatenate(speech), np.concatenate(positions)
-    smean, sstd = allx.mean(0), np.maximum(allx.std(0), 1e-6)
-    pmean, pstd = ally.mean(0), floored_spread(ally.std(0), stages.scale_floor)
-    xs, fol = _sequences([((s - smean) / sstd).astype(np.float32) for s in speech], config.sequence)
-    ys, _ = _sequences([((p - pmean) / pstd).astype(np.float32) for p in positions], config.sequence)
-    ls, _ = _sequences([np.asarray(p, np.int64) for p in phases], config.sequence)
-    X, Y, L = torch.from_numpy(xs), torch.from_numpy(ys), torch.from_numpy(ls)
-    F = torch.from_numpy(fol)
+    (smean, sstd), (pmean, pstd) = mean_std(speech), mean_std(positions)
+    sstd, pstd = np.maximum(sstd, 1e-6), floored_spread(pstd, stages.scale_floor)
+    X = Sequences(SegmentStore(folder / "speech.npy", (((s - smean) / sstd).astype(np.float32) for s in speech)),
+                   config.sequence)
+    Y = Sequences(SegmentStore(folder / "positions.npy", (((p - pmean) / pstd).astype(np.float32)
+                                                           for p in positions)), config.sequence)
+    L = Sequences(SegmentStore(folder / "phases.npy", (np.asarray(p, np.int64).reshape(len(p), 1) for p in phases)),
+                   config.sequence, squeeze=True)
+    if not len(X):
+        raise ValueError(f"no training segment has {config.sequence} frames for a sequence")
+    F = torch.from_numpy(X.follows)
     arm = torch.as_tensor(np.asarray(arm_columns, np.int64))
     n = len(X)
     bce = nn.BCEWithLogitsLoss()
@@ -162,7 +174,7 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     for epoch in range(first, first if done else stages.classifier_epochs):
         clf.train()
         for idx in torch.from_numpy(rng.permutation(n)).split(stages.batch_size):
-            logits = clf(_classifier_input(Y[idx], X[idx, :, -1], arm))
+            logits = clf(_classifier_input(Y[idx], X[idx][..., -1], arm))
             loss = nn.functional.cross_entropy(logits.reshape(-1, config.n_phases), L[idx].reshape(-1))
             opt.zero_grad()
             loss.backward()
@@ -178,9 +190,9 @@ def train_mogan(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], p
     f1 = float("nan")
     held: tuple[torch.Tensor, torch.Tensor] | None = None   # held-out (speech, positions) sequences
     if val is not None:
-        vx, _ = _sequences([((s - smean) / sstd).astype(np.float32) for s in val[0]], config.sequence)
-        vy, _ = _sequences([((p - pmean) / pstd).astype(np.float32) for p in val[1]], config.sequence)
-        vl, _ = _sequences([np.asarray(p, np.int64) for p in val[2]], config.sequence)
+        vx, _ = sequences([((s - smean) / sstd).astype(np.float32) for s in val[0]], config.sequence)
+        vy, _ = sequences([((p - pmean) / pstd).astype(np.float32) for p in val[1]], config.sequence)
+        vl, _ = sequences([np.asarray(p, np.int64) for p in val[2]], config.sequence)
         held = torch.from_numpy(vx), torch.from_numpy(vy)
         with torch.no_grad():
             pred = clf(_classifier_input(held[1], held[0][..., -1], arm)).argmax(-1)
