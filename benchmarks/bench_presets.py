@@ -22,7 +22,9 @@ Reference rows measured in the same run: ``mean_pose`` (the training split's mea
 (an error, the divergence guard) is a row with its error, and the run goes on.
 
 Usage: python benchmarks/bench_presets.py [--minutes 10] [--seed 0] [--corpus DIR] [--only NAME ...]
-       [--presets cpu-small,paper] [--out DIR] [--markdown FILE]
+       [--presets cpu-small,paper] [--out DIR] [--markdown FILE] [--reuse-models]
+``--reuse-models`` scores the models already in OUT/models (same preset and budget, else an error) instead of
+training them again, e.g. after an interrupted run.
 Prints one table (Markdown) and writes it with the command, date, load and corpus size to OUT/presets.md (and to
 ``--markdown`` when given); rows also to OUT/presets.json.
 """
@@ -42,13 +44,13 @@ from typing import Any
 # the fixed budget per system, the same for both presets: (options set, how it reads in the table)
 BUDGETS: dict[str, tuple[dict[str, Any], str]] = {
     "gesticulator": ({"epochs": 20}, "20 epochs (paper schedule 95)"),
-    "aud2pose": ({"epochs": 2, "patience": 2}, "2 epochs (paper 120)"),
-    "aud2motion": ({"epochs": 30, "patience": 30}, "30 epochs (paper 500)"),
-    "aud2repr2pose": ({"epochs": 2, "patience": 2, "dae_epochs": 5}, "DAE 5 + 2 epochs (paper 20 + 120)"),
-    "gesture2vec": ({"dae_epochs": 5, "vq_epochs": 5, "vq_decoder_epochs": 5, "translation_epochs": 25},
-                    "5 + 5 + 5 + 25 epochs (paper 20 + 20 + 20 + 250)"),
-    "ferstl-mogan": ({"classifier_epochs": 10, "pretrain_epochs": 10, "adversarial_steps": 150,
-                      "realism_pretrain_steps": 50}, "10 + 10 epochs, 50 + 150 steps (default 30 + 30, 100 + 400)"),
+    "aud2pose": ({"epochs": 1, "patience": 1}, "1 epoch (paper 120)"),
+    "aud2motion": ({"epochs": 15, "patience": 15}, "15 epochs (paper 500)"),
+    "aud2repr2pose": ({"epochs": 1, "patience": 1, "dae_epochs": 3}, "DAE 3 + 1 epochs (paper 20 + 120)"),
+    "gesture2vec": ({"dae_epochs": 3, "vq_epochs": 3, "vq_decoder_epochs": 3, "translation_epochs": 15},
+                    "3 + 3 + 3 + 15 epochs (paper 20 + 20 + 20 + 250)"),
+    "ferstl-mogan": ({"classifier_epochs": 5, "pretrain_epochs": 5, "adversarial_steps": 100,
+                      "realism_pretrain_steps": 30}, "5 + 5 epochs, 30 + 100 steps (default 30 + 30, 100 + 400)"),
 }
 AUDIO_DRIVEN = {"gesticulator", "aud2pose", "aud2motion", "aud2repr2pose", "ferstl-mogan"}
 COLUMNS = ("system", "preset", "parameters", "budget", "train_s", "pose_err", "r", "swap", "lexical", "hellinger",
@@ -75,6 +77,19 @@ def train_command(system: str, preset: str, corpus: pathlib.Path, out: pathlib.P
     sets = [a for k, v in BUDGETS[system][0].items() for a in ("--set", f"{k}={v}")]
     return [sys.executable, "-m", "evalsuite", "train", "-g", system, "--corpus", str(corpus), "--preset", preset,
             *sets, "--seed", str(seed), "--checkpoint-every", "off", "-o", str(out)]
+
+
+def reusable(model_dir: pathlib.Path, system: str, preset: str) -> bool:
+    """Whether ``model_dir`` holds a finished training of ``system`` with ``preset`` and this script's budget
+    (``--reuse-models``); False when there is none, an error when it was trained otherwise."""
+    if not (model_dir / "model.json").is_file():
+        return False
+    record = json.loads((model_dir / "model.json").read_text())
+    config = record.get("config", {})
+    if record.get("preset") != preset or any(config.get(k) != v for k, v in BUDGETS[system][0].items()):
+        raise SystemExit(f"{model_dir}: trained with another preset or budget than {preset} "
+                         f"{BUDGETS[system][1]}; remove it or drop --reuse-models")
+    return True
 
 
 def markdown(rows: list[dict[str, Any]]) -> str:
@@ -109,6 +124,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--presets", default="cpu-small,paper", help="comma-separated presets trained per system")
     ap.add_argument("--out", type=pathlib.Path, default=None, help="working folder (default: a new temporary one)")
     ap.add_argument("--markdown", type=pathlib.Path, default=None, help="also write the report here")
+    ap.add_argument("--reuse-models", action="store_true",
+                    help="score a model already in OUT/models/SYSTEM_PRESET instead of training it again")
     args = ap.parse_args(argv)
     unknown = sorted(set(args.only or []) - set(BUDGETS))
     if unknown:
@@ -156,7 +173,8 @@ def main(argv: list[str] | None = None) -> int:
             cmd = train_command(name, preset, corpus_dir, model_dir, args.seed)
             print(" ".join(cmd[1:]), flush=True)
             t0 = time.perf_counter()
-            proc = subprocess.run(cmd, capture_output=True, text=True)
+            reused = args.reuse_models and reusable(model_dir, name, preset)
+            proc = subprocess.CompletedProcess(cmd, 0) if reused else subprocess.run(cmd, capture_output=True, text=True)
             row["train_s"] = round(time.perf_counter() - t0)
             if proc.returncode != 0:
                 lines = [ln for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]

@@ -41,7 +41,7 @@ def test_train_command_names_the_preset_and_the_same_budget_for_both(bench, tmp_
     paper = bench.train_command("aud2pose", "paper", tmp_path / "c", tmp_path / "m", 3)
     assert small[small.index("--preset") + 1] == "cpu-small" and paper[paper.index("--preset") + 1] == "paper"
     sets = [a for i, a in enumerate(paper) if i and paper[i - 1] == "--set"]
-    assert sets == [a for i, a in enumerate(small) if i and small[i - 1] == "--set"] == ["epochs=2", "patience=2"]
+    assert sets == [a for i, a in enumerate(small) if i and small[i - 1] == "--set"] == ["epochs=1", "patience=1"]
     assert paper[paper.index("--seed") + 1] == "3" and "--budget-minutes" not in paper
 
 
@@ -68,3 +68,16 @@ def test_bad_arguments_are_named(bench, capsys):
     with pytest.raises(SystemExit):
         bench.main(["--presets", "huge"])
     assert "--presets" in capsys.readouterr().err
+
+
+def test_reuse_models_only_takes_a_model_of_the_same_preset_and_budget(bench, tmp_path):
+    import json
+
+    assert not bench.reusable(tmp_path / "none", "aud2pose", "paper")
+    (tmp_path / "model.json").write_text(json.dumps({"preset": "paper", "config": {"epochs": 1, "patience": 1}}))
+    assert bench.reusable(tmp_path, "aud2pose", "paper")
+    with pytest.raises(SystemExit, match="another preset or budget"):
+        bench.reusable(tmp_path, "aud2pose", "cpu-small")
+    (tmp_path / "model.json").write_text(json.dumps({"preset": "paper", "config": {"epochs": 120}}))
+    with pytest.raises(SystemExit, match="another preset or budget"):
+        bench.reusable(tmp_path, "aud2pose", "paper")
