@@ -27,7 +27,8 @@ from evalsuite.corpus.types import Segment
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import SegmentArrays, corpus_arrays
 
-__all__ = ["SegmentStore", "mean_std", "Windows", "Rows", "Mapped", "stream_arrays", "RELEASE_BYTES"]
+__all__ = ["SegmentStore", "mean_std", "max_abs_deviation", "Windows", "Rows", "Mapped", "stream_arrays",
+           "RELEASE_BYTES", "release"]
 
 RELEASE_BYTES = 64 << 20  # pages of a map read (counted 4 KiB per gathered row at least) before they are dropped
 _PAGE = 4096
@@ -106,12 +107,25 @@ class SegmentStore(Sequence[np.ndarray]):
             self.release()
         return out
 
+    def take(self, indices: Iterable[int]) -> list[np.ndarray]:
+        """Copies of segments ``indices``, counted as :meth:`gather` counts its rows."""
+        out = [np.array(self[int(i)]) for i in indices]
+        self._read += sum(max(a.nbytes, _PAGE) for a in out)
+        if self._read >= RELEASE_BYTES:
+            self.release()
+        return out
+
     def release(self) -> None:
         """Drop the pages of the map that this process has read (a later read takes them from the page cache)."""
         self._read = 0
-        handle = getattr(self.data, "_mmap", None)
-        if handle is not None and hasattr(handle, "madvise"):
-            handle.madvise(mmap.MADV_DONTNEED)
+        release(self.data)
+
+
+def release(view: np.ndarray) -> None:
+    """Drop the pages of the map under ``view`` (any view of a store's ``data``) from this process's memory."""
+    handle = getattr(view, "_mmap", None)
+    if handle is not None and hasattr(handle, "madvise"):
+        handle.madvise(mmap.MADV_DONTNEED)
 
 
 def mean_std(arrays: Iterable[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -138,6 +152,18 @@ def mean_std(arrays: Iterable[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         sq = d.sum(0) if sq is None else np.add.reduce(np.concatenate([sq[None], d]), axis=0)
     assert sq is not None
     return mean, np.sqrt(np.true_divide(sq, n, dtype=dtype))
+
+
+def max_abs_deviation(arrays: Iterable[np.ndarray], mean: np.ndarray) -> np.ndarray:
+    """Per-column ``max_t |x_t - mean|`` over the rows of all arrays, one array at a time (exact: a maximum)."""
+    out = None
+    for a in arrays:
+        if len(a):
+            m = np.abs(a - mean).max(0)
+            out = m if out is None else np.maximum(out, m)
+    if out is None:
+        raise ValueError("no frames to take a maximum over")
+    return out
 
 
 class Windows:

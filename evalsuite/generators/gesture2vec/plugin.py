@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import json
 import pathlib
+import tempfile
+import zipfile
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -29,6 +31,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
+from evalsuite.generators.datastream import SegmentStore, release
 from evalsuite.generators.gesture2vec.info import DEVIATIONS as CORE_DEVIATIONS
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
@@ -73,6 +76,16 @@ def _word_track(transcript: Transcript | None, embedder: Any) -> list[tuple[np.n
         return []
     vectors = embedder.embed([w.text for w in words])
     return [(np.asarray(v, np.float32), float(w.start)) for v, w in zip(vectors, words)]
+
+
+def _save_pool(path: pathlib.Path, pool: dict[int, list[np.ndarray]]) -> None:
+    """``np.savez(path, code_K=np.stack(clips of code K), ...)``, one code's clips in memory at a time (the
+    clips are views of a memory-mapped file, whose pages are dropped after each code)."""
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for k, clips in pool.items():
+            with zf.open(f"code_{k}.npy", "w", force_zip64=True) as fh:
+                np.lib.format.write_array(fh, np.stack(clips), allow_pickle=False)
+            release(clips[0])
 
 
 class Gesture2Vec(Generator):
@@ -148,6 +161,7 @@ class Gesture2Vec(Generator):
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
         from evalsuite.features.embeddings import get_embedder
+        from evalsuite.generators.gesture2vec.data import word_rows, word_tracks
         from evalsuite.generators.gesture2vec.net import G2VConfig
         from evalsuite.generators.gesture2vec.training import G2VStages, code_perplexity, train_gesture2vec
 
@@ -156,8 +170,11 @@ class Gesture2Vec(Generator):
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), "rotmat")
         embedder = get_embedder(st["words"])
-        poses = [rep.encode(s.load_motion()) for s in train]
-        words = [_word_track(s.transcript, embedder) for s in train]
+        data = tempfile.TemporaryDirectory(prefix="gesture2vec-data-")  # the training split memory-mapped
+        folder = pathlib.Path(data.name)
+        poses = SegmentStore(folder / "corpus_poses.npy", (rep.encode(s.load_motion()) for s in train))
+        words = word_tracks(SegmentStore(folder / "word_tracks.npy", (
+            word_rows(_word_track(s.transcript, embedder), embedder.dim) for s in train), np.float64))
         vposes = [rep.encode(s.load_motion()) for s in val]
         vwords = [_word_track(s.transcript, embedder) for s in val]
         config = G2VConfig(pose_dim=rep.dim, text_dim=embedder.dim, chunk=st["chunk"], stride=st["stride"],
@@ -168,14 +185,16 @@ class Gesture2Vec(Generator):
                            batch_size=st["batch_size"], reset_dead_codes=st["reset_dead_codes"],
                            scale_floor=st["scale_floor"], weakened_decoder=st["weakened_decoder"])
         model = train_gesture2vec(poses, words, config, rep.fps, stages, seed=seed, val_poses=vposes,
-                                  val_words=vwords, budget_seconds=budget_seconds(budget_minutes), on_epoch=progress)
+                                  val_words=vwords, budget_seconds=budget_seconds(budget_minutes), on_epoch=progress,
+                                  data_dir=folder)
         rep.save(out_dir)
         shas = {name: save_state(out_dir, f"{name}.pt", net)
                 for name, net in (("dae", model.dae), ("vqdvae", model.vq), ("translator", model.translator))}
         np.savez(out_dir / "normalisers.npz", pose_mean=model.pose_mean, pose_scale=model.pose_scale)
         np.save(out_dir / "code_counts.npy", model.code_counts)
-        pool = {f"code_{k}": np.stack(v) for k, v in model.train_chunks.items()}
-        np.savez(out_dir / "retrieval_pool.npz", **pool)  # type: ignore[arg-type]
+        _save_pool(out_dir / "retrieval_pool.npz", model.train_chunks)
+        model.data.cleanup()
+        data.cleanup()
         write_json(out_dir / "settings.json", {**st, "net": config.to_dict(), "fps": rep.fps,
                                                "text_dim": embedder.dim})
         states = {f"{name}.{k}": v for name, net in (("dae", model.dae), ("vqdvae", model.vq),

@@ -12,22 +12,32 @@ the validation segments, no noise and no dropout).
 """
 from __future__ import annotations
 
+import pathlib
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import torch
 from torch import nn
 
 from evalsuite.generators import checkpoints
+from evalsuite.generators.datastream import Rows, SegmentStore, Windows, max_abs_deviation, mean_std
+from evalsuite.generators.gesture2vec.data import (
+    WordTrack,
+    _aligned,
+    _latent_chunks,
+    _pad_words,
+    _translation_pairs,
+    _window_words,
+)
 from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
 from evalsuite.generators.scaling import floored_spread
 
 __all__ = ["G2VStages", "TrainedG2V", "train_gesture2vec", "generate_gesture2vec", "code_perplexity",
            "WordTrack", "latent_windows"]
-
-WordTrack = Sequence[tuple[np.ndarray, float]]   # (embedding, start time in seconds) per word
 
 
 @dataclass(frozen=True)
@@ -58,6 +68,7 @@ class TrainedG2V:
     history: list[dict] = field(default_factory=list)
     train_chunks: dict[int, list[np.ndarray]] = field(default_factory=dict)  # for retrieval decoding
     stopped: list[str] = field(default_factory=list)                         # stages cut by the budget
+    data: Any = None                                                         # the training maps' folder
 
 
 def code_perplexity(counts: np.ndarray) -> float:
@@ -73,79 +84,16 @@ def _batches(n: int, size: int, rng: np.random.Generator):
         yield torch.from_numpy(order[i:i + size])
 
 
-def _latent_chunks(latent: np.ndarray, chunk: int, stride: int) -> np.ndarray:
-    feat = np.concatenate([latent, np.diff(latent, axis=0, prepend=latent[:1])], axis=1)
-    starts = range(0, len(feat) - chunk + 1, stride)
-    return np.stack([feat[s:s + chunk] for s in starts]) if len(starts) else np.zeros((0, chunk, feat.shape[1]))
-
-
-def _window_words(words: WordTrack, start: float, length: float, text_dim: int) -> np.ndarray:
-    rows = [np.concatenate([emb, [(t - start) / length]]) for emb, t in words if start <= t < start + length]
-    return np.asarray(rows, np.float32).reshape(-1, text_dim + 1)
-
-
-def _aligned(words: WordTrack, start: float, chunk_s: float, n: int, text_dim: int) -> np.ndarray:
-    """(n, 2 (text_dim + 1)): per chunk k of a window, the mean (embedding, position in the chunk) of the words
-    starting in chunk k, then of those starting in chunk k - 1 (zeros without words)."""
-    out = np.zeros((n + 1, text_dim + 1), np.float32)     # row j: chunk j - 1 (row 0: the chunk before the window)
-    count = np.zeros(n + 1)
-    for emb, t in words:
-        j = int(np.floor((t - start) / chunk_s)) + 1
-        if 0 <= j <= n:
-            out[j] += np.concatenate([emb, [(t - start) / chunk_s - (j - 1)]])
-            count[j] += 1
-    out /= np.maximum(count, 1)[:, None]
-    return np.concatenate([out[1:], out[:-1]], axis=1)
-
-
-def _pad_words(items: list[np.ndarray], text_dim: int) -> tuple[torch.Tensor, torch.Tensor]:
-    width = max(1, max(len(w) for w in items))
-    x = np.zeros((len(items), width, text_dim + 1), np.float32)
-    mask = np.zeros((len(items), width), bool)
-    for i, w in enumerate(items):
-        x[i, :len(w)] = w
-        mask[i, :len(w)] = True
-        if not len(w):
-            mask[i, 0] = True  # an empty window attends to one zero row (silence)
-    return torch.from_numpy(x), torch.from_numpy(mask)
-
-
-def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequence[WordTrack], c: G2VConfig,
-                       fps: float, norm: Sequence[np.ndarray] | None = None,
-                       pool: dict[int, list[np.ndarray]] | None = None
-                       ) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
-    """Word windows and the codes of their non-overlapping chunks (and, with ``pool``, each code's clips).
-
-    A window starts every ``c.stride`` frames (10), the step of the VQ-DVAE's training chunks, not every
-    ``c.chunk`` frames: three times the pairs from one corpus, with each keyword at more offsets within a chunk.
-    On the 30-minute synthetic corpus this raised the generated motion's lexical contrast from 0.26 to 0.62 x
-    natural's (the translator over-fits the paper's K = 300 classes from non-overlapping windows alone)."""
-    win = c.chunk * c.chunks_per_window
-    srcs: list[np.ndarray] = []
-    tgts: list[np.ndarray] = []
-    aligned: list[np.ndarray] = []
-    pooled: set[tuple[int, int]] = set()  # (segment, first frame): overlapping windows share chunks
-    with torch.no_grad():
-        for i, (lat, track) in enumerate(zip(latents, words)):
-            for s in range(0, len(lat) - win + 1, c.stride):
-                feats = _latent_chunks(lat[s:s + win], c.chunk, c.chunk)
-                codes = vq.quantise(vq.encode(torch.from_numpy(feats.astype(np.float32)))).numpy()
-                srcs.append(_window_words(track, s / fps, win / fps, c.text_dim))
-                aligned.append(_aligned(track, s / fps, c.chunk / fps, c.chunks_per_window, c.text_dim))
-                tgts.append(codes)
-                if pool is not None and norm is not None:
-                    for k, code in enumerate(codes):
-                        if (i, s + k * c.chunk) not in pooled:
-                            pooled.add((i, s + k * c.chunk))
-                            pool.setdefault(int(code), []).append(norm[i][s + k * c.chunk:s + (k + 1) * c.chunk])
-    return srcs, tgts, aligned
-
-
 def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], config: G2VConfig, fps: float,
                       stages: G2VStages = G2VStages(), *, seed: int = 0,
                       val_poses: Sequence[np.ndarray] = (), val_words: Sequence[WordTrack] = (),
-                      budget_seconds: float | None = None,
-                      on_epoch: Callable[[dict], None] | None = None) -> TrainedG2V:
+                      budget_seconds: float | None = None, on_epoch: Callable[[dict], None] | None = None,
+                      data_dir: pathlib.Path | None = None) -> TrainedG2V:
+    """The three stages on segments (lists or stores). The training split's normalised poses, latents, chunks and
+    word windows are memory-mapped in a temporary folder in ``data_dir`` (default: the system's), removed when
+    the model is no longer used (the retrieval pool's clips are views of the poses' map)."""
+    data = tempfile.TemporaryDirectory(prefix="gesture2vec-data-", dir=data_dir)
+    folder = pathlib.Path(data.name)
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     history: list[dict] = []
@@ -166,16 +114,15 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         stopped.append(name)
         return True
 
-    allp = np.concatenate(poses)
-    mean = allp.mean(0)
+    mean = mean_std(poses)[0]   # one segment at a time, the concatenation's figures bit for bit
     # mean 0, max |x| 1 (paper §4.1), but a rotation-matrix entry that hardly moves (idle sway) is not stretched
     # to +-1 (evalsuite.generators.scaling)
-    scale = floored_spread(np.abs(allp - mean).max(0), stages.scale_floor)
-    norm = [((p - mean) / scale).astype(np.float32) for p in poses]
+    scale = floored_spread(max_abs_deviation(poses, mean), stages.scale_floor)
+    norm = SegmentStore(folder / "poses.npy", (((p - mean) / scale).astype(np.float32) for p in poses))
     vnorm = [((p - mean) / scale).astype(np.float32) for p in val_poses]
     # 1. frame autoencoder
     dae = FrameDAE(config)
-    x = torch.from_numpy(np.concatenate(norm))
+    x = Rows(norm)
     vx = torch.from_numpy(np.concatenate(vnorm)) if vnorm else None
     opt = torch.optim.Adam(dae.parameters(), lr=stages.learning_rate)
     ck = checkpoints.current()  # resumable: everything each stage's next epoch depends on
@@ -185,7 +132,8 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         dae.train()
         total = 0.0
         for idx in _batches(len(x), stages.batch_size, rng):
-            loss = nn.functional.mse_loss(dae(x[idx]), x[idx])
+            xb = torch.from_numpy(x[idx.numpy()])
+            loss = nn.functional.mse_loss(dae(xb), xb)
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -202,19 +150,24 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             break
     dae.eval()
     with torch.no_grad():
-        latents = [dae.encoder(torch.from_numpy(p)).numpy() for p in norm]
+        latents = SegmentStore(folder / "latents.npy", (dae.encoder(torch.from_numpy(np.array(p))).numpy()
+                                                        for p in norm))
         vlatents = [dae.encoder(torch.from_numpy(p)).numpy() for p in vnorm]
-    # 2. VQ-DVAE, then its decoder alone
-    chunks = np.concatenate([_latent_chunks(lat, config.chunk, config.stride) for lat in latents])
+    # 2. VQ-DVAE, then its decoder alone: chunks of the latents and their frame differences
+    chunks = Windows(SegmentStore(folder / "latent_chunks.npy", (np.concatenate(
+        [lat, np.diff(lat, axis=0, prepend=lat[:1])], axis=1).astype(np.float32) for lat in latents)),
+        config.chunk, config.stride)
     if not len(chunks):
         raise ValueError(f"no segment has {config.chunk} frames for a VQ-DVAE chunk")
-    ct = torch.from_numpy(chunks.astype(np.float32))
+
+    def ct(idx: Any) -> torch.Tensor:
+        return torch.from_numpy(chunks[np.asarray(idx)])
     vchunks = [_latent_chunks(lat, config.chunk, config.stride) for lat in vlatents]
     vct = torch.from_numpy(np.concatenate(vchunks).astype(np.float32)) if sum(map(len, vchunks)) else None
     vq = VQDVAE(config)
     # start the codebook from encoder outputs of random chunks, so that no code starts unused
     with torch.no_grad():
-        z0 = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), config.codebook, replace=len(ct) < config.codebook))])
+        z0 = vq.encode(ct(rng.choice(len(chunks), config.codebook, replace=len(chunks) < config.codebook)))
         vq.codebook.weight.copy_(z0 + 0.01 * torch.randn_like(z0))
     decoder = [*vq.decoder.parameters(), *vq.out.parameters()]
     for p in decoder:  # weakened decoder: no gradient reaches it, the encoder carries the reconstruction
@@ -234,9 +187,10 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             opt = decoder_opt
         vq.train()
         total, counts = 0.0, np.zeros(config.codebook)
-        for idx in _batches(len(ct), stages.batch_size, rng):
-            recon, codes, vq_loss = vq(ct[idx])
-            loss = nn.functional.mse_loss(recon, ct[idx]) + (0 if decoder_only else vq_loss)
+        for idx in _batches(len(chunks), stages.batch_size, rng):
+            cb = ct(idx.numpy())
+            recon, codes, vq_loss = vq(cb)
+            loss = nn.functional.mse_loss(recon, cb) + (0 if decoder_only else vq_loss)
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -246,11 +200,11 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             dead = np.flatnonzero(counts == 0)
             if len(dead):
                 with torch.no_grad():
-                    z = vq.encode(ct[torch.from_numpy(rng.choice(len(ct), len(dead), replace=len(ct) < len(dead)))])
+                    z = vq.encode(ct(rng.choice(len(chunks), len(dead), replace=len(chunks) < len(dead))))
                     vq.codebook.weight[torch.from_numpy(dead)] = z + 0.01 * torch.randn_like(z)
         stage = "vq-dvae decoder" if decoder_only else "vq-dvae"
         rec = {"stage": stage, "epoch": epoch + 1,
-               "train_loss": total / len(ct), "perplexity": code_perplexity(counts)}
+               "train_loss": total / len(chunks), "perplexity": code_perplexity(counts)}
         if vct is not None:
             vq.eval()
             with torch.no_grad():
@@ -265,15 +219,14 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     vq.eval()
     # 3. translation: word windows (one every `stride` frames) -> codes of each window's non-overlapping chunks
     train_chunks: dict[int, list[np.ndarray]] = {}
-    srcs, tgts, al = _translation_pairs(vq, latents, words, config, fps, norm, train_chunks)
+    srcs, tgts, al = _translation_pairs(vq, latents, words, config, fps, norm, train_chunks, folder)
     vsrcs, vtgts, val_al = _translation_pairs(vq, vlatents, val_words, config, fps)
-    if not srcs:
+    if not len(srcs):
         raise ValueError(f"no segment has {config.chunk * config.chunks_per_window} frames for a translation window")
     code_counts = np.bincount(np.concatenate(tgts), minlength=config.codebook)
     translator = Translator(config)
     opt = torch.optim.Adam(translator.parameters(), lr=stages.translation_learning_rate)
     targets = torch.from_numpy(np.stack(tgts).astype(np.int64))
-    al_t = torch.from_numpy(np.stack(al))
     ce = nn.functional.cross_entropy
     state = {"translator": translator, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
     first, done = ck.start("translation", state)
@@ -281,8 +234,8 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         translator.train()
         total = 0.0
         for idx in _batches(len(srcs), stages.batch_size, rng):
-            wx, mask = _pad_words([srcs[i] for i in idx.tolist()], config.text_dim)
-            logits = translator(wx, mask, targets[idx], al_t[idx])
+            wx, mask = _pad_words(srcs.take(idx.tolist()), config.text_dim)
+            logits = translator(wx, mask, targets[idx], torch.from_numpy(al[idx.numpy()]))
             loss = ce(logits.reshape(-1, config.codebook), targets[idx].reshape(-1))
             opt.zero_grad()
             loss.backward()
@@ -303,7 +256,9 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         if stop:
             break
     translator.eval()
-    return TrainedG2V(config, fps, dae, vq, translator, mean, scale, code_counts, history, train_chunks, stopped)
+    model = TrainedG2V(config, fps, dae, vq, translator, mean, scale, code_counts, history, train_chunks, stopped)
+    model.data = data   # the folder lives as long as the model (its pool's clips are views of a map)
+    return model
 
 
 @torch.no_grad()
