@@ -6,7 +6,7 @@ opens it in append mode)::
     {"m": "POST", "kind": "answer", "status": 200, "wall": ..., "cpu": ..., "lock": ..., "commit": ...,
      "sql": ..., "n_tx": ...}
 
-all in milliseconds: ``wall`` the request's time inside the app (WSGI call to the end of its body), ``cpu``
+all in milliseconds: ``wall`` the request's time inside the app (the WSGI call, which runs the view and builds the body), ``cpu``
 the CPU time of the request's thread, ``lock`` the time spent opening write transactions (on SQLite
 ``BEGIN IMMEDIATE``, i.e. waiting for the write lock, including the busy handler's sleeps; on PostgreSQL
 waiting for a pooled connection is in ``pool``), ``commit`` the time in COMMIT (the fsync, and on SQLite an
@@ -104,7 +104,7 @@ class TimingMiddleware:
             return start_response(s, headers, exc_info)
 
         try:
-            yield from self.app(environ, start)
+            return self.app(environ, start)        # Flask runs the view here; the body is already built
         finally:
             acc, _local.acc = _local.acc, None
             line = {"m": environ.get("REQUEST_METHOD"), "kind": kind_of(environ.get("PATH_INFO", "")),
