@@ -10,7 +10,9 @@ import contextlib
 import math
 import os
 import pathlib
+import queue
 import tempfile
+import threading
 import warnings
 
 import numpy as np
@@ -54,7 +56,14 @@ class VideoWriter:
         audio: ``(samples (n, ch) float32, rate)`` already aligned with the video, or None.
         crf: x264 constant rate factor (18 = visually lossless, 23 = ffmpeg's default).
         bitrate: constant bitrate instead of ``crf`` (e.g. ``"400k"``; :func:`renderers.filesize.cbr_params`).
+
+    Frames go to ffmpeg from a writer thread through a short queue (``QUEUE`` frames), so the caller renders
+    the next frame while ffmpeg takes the previous one from the pipe (a write of a whole frame waits until
+    ffmpeg has read it); :meth:`write` copies the frame, so the caller may reuse its array at once. An error
+    in the thread (ffmpeg gone) is raised by the next :meth:`write` or by :meth:`close`.
     """
+
+    QUEUE = 4
 
     def __init__(self, path, width: int, height: int, fps: float, audio=None, crf: int = 20,
                  preset: str = "veryfast", bitrate: str | None = None):
@@ -79,15 +88,34 @@ class VideoWriter:
             macro_block_size=2, pix_fmt_out="yuv420p", output_params=params, audio_path=audio_path,
             audio_codec="aac" if audio is not None else None, ffmpeg_log_level="error")
         self._gen.send(None)
+        self._queue: queue.Queue = queue.Queue(maxsize=self.QUEUE)
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._pump, name=f"ffmpeg writer {self.path.name}", daemon=True)
+        self._thread.start()
+
+    def _pump(self) -> None:
+        """The writer thread: send queued frames to ffmpeg until ``None``; keep the first error."""
+        while (data := self._queue.get()) is not None:
+            if self._error is None:
+                try:
+                    self._gen.send(data)
+                except BaseException as exc:   # re-raised in the caller's thread
+                    self._error = exc
 
     def write(self, frame: np.ndarray) -> None:
-        self._gen.send(np.ascontiguousarray(frame, dtype=np.uint8))
+        if self._error is not None:
+            raise self._error
+        self._queue.put(np.ascontiguousarray(frame, dtype=np.uint8).tobytes())
         self.n_frames += 1
 
     def close(self) -> None:
         if self._gen is not None:
+            self._queue.put(None)
+            self._thread.join()
             self._gen.close()
             self._gen = None
+            if self._error is not None:
+                raise self._error
         if self._wav is not None:
             with contextlib.suppress(OSError):
                 os.remove(self._wav)
@@ -97,10 +125,16 @@ class VideoWriter:
         return self
 
     def __exit__(self, exc_type, *exc):
-        self.close()
-        if exc_type is not None:
-            with contextlib.suppress(OSError):
-                self.path.unlink()
+        failed = exc_type is not None
+        try:
+            self.close()
+        except BaseException:
+            failed = True
+            raise
+        finally:
+            if failed:   # an unfinished file is no video
+                with contextlib.suppress(OSError):
+                    self.path.unlink()
 
 
 def read_video_frames(path):

@@ -326,3 +326,23 @@ def test_msaa_setting_reaches_the_framebuffer():
     smooth = render_frames([motion], RenderSettings(width=160, height=120, msaa=4))[0]
     assert not np.array_equal(hard, smooth)
     assert edge_blend(smooth) > 1.5 * edge_blend(hard)
+
+
+def test_video_writer_sends_frames_from_a_thread_and_copies_them(tmp_path):
+    """VideoWriter hands frames to ffmpeg from its own thread (rendering goes on meanwhile); the caller may
+    refill its array right after write(): every frame is encoded as it was when written."""
+    import threading
+
+    from renderers.video import VideoWriter, read_video_frames
+
+    buf = np.zeros((48, 64, 3), dtype=np.uint8)
+    levels = [30, 90, 150, 210, 250, 10]
+    with VideoWriter(tmp_path / "v.mp4", 64, 48, 30.0) as writer:
+        assert any(t.name == "ffmpeg writer v.mp4" for t in threading.enumerate())
+        for level in levels:
+            buf[:] = level          # the same array, refilled at once
+            writer.write(buf)
+    assert not any(t.name == "ffmpeg writer v.mp4" for t in threading.enumerate())
+    means = [float(frame.mean()) for _, frame in read_video_frames(tmp_path / "v.mp4")]
+    assert len(means) == len(levels)
+    np.testing.assert_allclose(means, levels, atol=3)
