@@ -233,6 +233,8 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
     timing_log = os.path.join(os.path.dirname(study), f"timing-{secrets.token_hex(4)}.log") if args.timing else None
     if timing_log:
         env[TIMING_ENV] = timing_log
+    if args.no_write_queue:
+        env["EVALSUITE_SQLITE_WRITE_QUEUE"] = "0"
     server = Gunicorn(env, args.workers, args.threads)
     nginx = Nginx(f"127.0.0.1:{server.port}", stim, media_log, workers=args.nginx_workers)
     server.start()
@@ -410,6 +412,9 @@ def main():
     ap.add_argument("--timing", action="store_true",
                     help="log every request's time inside the app split into CPU, write-lock wait, commit, SQL, pool "
                          "wait and the rest (study_app.timing; EVALSUITE_TIMING_LOG) and print the breakdown")
+    ap.add_argument("--no-write-queue", action="store_true",
+                    help="SQLite writers poll in SQLite's busy handler instead of waiting in the write queue "
+                         "(study_app.storage.writequeue), to compare")
     ap.add_argument("--ramp", type=float, default=30.0,
                     help="participants arrive uniformly spread over this many seconds")
     args = ap.parse_args()

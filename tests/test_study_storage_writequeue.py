@@ -1,7 +1,7 @@
 """The SQLite write queue (study_app.storage.writequeue) and the lock-free page view: a writing transaction
 holds an exclusive flock on ``<db>-writers`` until it ends, a killed holder frees it, a thread never waits
 for itself, a repeated page view takes no lock at all, and a page's first view commits without the fsync
-that every answer keeps (synchronous=FULL)."""
+that every answer keeps (synchronous=FULL; on PostgreSQL synchronous_commit)."""
 from __future__ import annotations
 
 import fcntl
@@ -13,12 +13,14 @@ import textwrap
 import threading
 import time
 
+import pytest
 import study_helpers as h
 from sqlalchemy import event, text
 from study_fixtures import make_app
 
 from study_app.context import store_of
 from study_app.storage import make_engine
+from study_app.testing import create_database
 
 
 def _queue_is_held(db_path) -> bool:
@@ -148,3 +150,15 @@ def test_a_first_page_view_skips_the_fsync_and_answers_keep_it(study_dir, sqlite
     p.page()                                            # the next page's first view
     p.page()                                            # and again: nothing to write, no transaction
     assert begins == [1]
+
+
+@pytest.mark.postgres
+def test_postgres_first_view_commits_without_waiting_for_the_flush_and_answers_wait(pg_server):
+    from study_app.storage.store import Store
+    # (the throwaway server runs with synchronous_commit off; these connections with PostgreSQL's default)
+    store = Store(make_engine(create_database(pg_server, "relaxed") + "?options=-csynchronous_commit%3Don"))
+    with store.RelaxedSession.begin() as db:
+        assert db.execute(text("SHOW synchronous_commit")).scalar() == "off"
+    for _ in range(3):           # the same pooled connection again: the setting did not outlive its transaction
+        with store.Session.begin() as db:
+            assert db.execute(text("SHOW synchronous_commit")).scalar() == "on"

@@ -9,10 +9,14 @@ A SQLite database file gets the write queue (:mod:`study_app.storage.writequeue`
 and thread wait for their turn in the kernel instead of polling in SQLite's busy handler. A writing session
 with the ``evalsuite_relaxed`` execution option (a record that acknowledges nothing, e.g. a page's first
 view) commits with ``synchronous=NORMAL``: no fsync of its own, durable through a crash of the server
-(WAL), and through a crash of the machine once the next FULL commit (any answer) has synced the log.
+(WAL), and through a crash of the machine once the next FULL commit (any answer) has synced the log; on
+PostgreSQL with ``synchronous_commit`` off for that transaction. Answers are never written so.
+``EVALSUITE_SQLITE_WRITE_QUEUE=0`` turns the queue off (``benchmarks/study_load.py --no-write-queue``
+compares).
 """
 from __future__ import annotations
 
+import os
 import time
 
 from sqlalchemy import create_engine, event, make_url
@@ -23,9 +27,11 @@ from study_app import timing
 from study_app.design import plans_digest
 from study_app.errors import StudyStateError
 from study_app.storage.tables import Base, Plan, StudyRecord
-from study_app.storage.writequeue import QueuedConnection, connection_class
+from study_app.storage.writequeue import connection_class
 
-__all__ = ["make_engine", "init_db"]
+__all__ = ["make_engine", "init_db", "WRITE_QUEUE_ENV"]
+
+WRITE_QUEUE_ENV = "EVALSUITE_SQLITE_WRITE_QUEUE"      # "0": no write queue (to compare with it, benchmarks)
 
 
 def make_engine(url: str):
@@ -34,12 +40,13 @@ def make_engine(url: str):
     if url.startswith("sqlite"):
         connect_args: dict = {"timeout": 60, "check_same_thread": False}
         database = make_url(url).database
-        if database and database != ":memory:" and not database.startswith("file:"):
+        queue = os.environ.get(WRITE_QUEUE_ENV, "1") != "0"
+        if queue and database and database != ":memory:" and not database.startswith("file:"):
             connect_args["factory"] = connection_class(database)
         engine = create_engine(url, connect_args=connect_args)
 
         @event.listens_for(engine, "connect")
-        def _sqlite_connect(dbapi_conn, _record):
+        def _sqlite_connect(dbapi_conn, record):
             # Let SQLAlchemy's "begin" hook start transactions (pysqlite's own BEGIN is deferred,
             # which turns read-then-write transactions into SQLITE_BUSY under concurrency).
             dbapi_conn.isolation_level = None
@@ -49,8 +56,7 @@ def make_engine(url: str):
             cur.execute("PRAGMA busy_timeout=60000")
             cur.execute("PRAGMA foreign_keys=ON")
             cur.close()
-            if isinstance(dbapi_conn, QueuedConnection):
-                dbapi_conn.synchronous = "FULL"
+            record.info["evalsuite_synchronous"] = "FULL"
 
         @event.listens_for(engine, "begin")
         def _sqlite_begin(conn):
@@ -58,18 +64,26 @@ def make_engine(url: str):
             # takes no lock at all under WAL.
             options = conn.get_execution_options()
             readonly = options.get("evalsuite_readonly")
-            dbapi_conn = conn.connection.dbapi_connection
-            if not readonly and isinstance(dbapi_conn, QueuedConnection):
+            if not readonly:
                 # records that are no acknowledgement (a page's first view) may skip the fsync
                 # ("evalsuite_relaxed": synchronous=NORMAL, see the module's docstring); everything else FULL
                 sync = "NORMAL" if options.get("evalsuite_relaxed") else "FULL"
-                if dbapi_conn.synchronous != sync:
+                info = conn.connection.info
+                if info.get("evalsuite_synchronous") != sync:
                     conn.exec_driver_sql(f"PRAGMA synchronous={sync}")
-                    dbapi_conn.synchronous = sync
-                timing.timed("lock", dbapi_conn.lock_writes)     # the write queue (the module's docstring)
+                    info["evalsuite_synchronous"] = sync
+                lock = getattr(conn.connection.dbapi_connection, "lock_writes", None)
+                if lock is not None:
+                    timing.timed("lock", lock)       # the write queue (see the module's docstring)
             conn.exec_driver_sql("BEGIN" if readonly else "BEGIN IMMEDIATE")
     else:
         engine = create_engine(url, pool_pre_ping=True, pool_size=5, max_overflow=10)
+        if engine.dialect.name == "postgresql":
+            @event.listens_for(engine, "begin")
+            def _pg_begin(conn):
+                if conn.get_execution_options().get("evalsuite_relaxed"):
+                    # the commit does not wait for the WAL flush (an answer's transaction always does)
+                    conn.exec_driver_sql("SET LOCAL synchronous_commit TO OFF")
     if timing.enabled():
         timing.instrument_engine(engine)
     return engine

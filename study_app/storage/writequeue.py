@@ -27,14 +27,12 @@ _held = threading.local()        # per thread: the queue files whose lock it hol
 
 class QueuedConnection(sqlite3.Connection):
     """A sqlite3 connection whose writing transactions take the write queue at ``lock_path`` first
-    (:func:`connection_class` makes one subclass per database file). ``synchronous`` is the
-    ``PRAGMA synchronous`` the engine last set on it."""
+    (:func:`connection_class` makes one subclass per database file)."""
 
     lock_path = ""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self.synchronous = ""
         self._queue_fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o600)
         self._queued, self._queued_at = False, 0.0
 
