@@ -20,8 +20,8 @@ shared, so the best round is the least disturbed one).
 clips of ``--stimulus-seconds`` each (windows of the same clip, two conditions per segment when N is even,
 synthetic speech muxed as AAC) rendered by the real ``evalsuite render stimuli CONFIG --jobs J`` command in a
 fresh process, in ``--stimulus-style``; it prints the wall time, seconds per stimulus, x real time (seconds of
-video per second of wall time) and how many worker processes were busy at once (sampled from /proc every
-0.2 s), which shows whether ``--jobs`` really renders in parallel.
+video per second of wall time) and how many processes were writing a video at once (a process with an
+ffmpeg child, sampled from /proc every 0.2 s), which shows whether ``--jobs`` really renders in parallel.
 
     python benchmarks/bench_render.py [--frames 300] [--rounds 2]
     python benchmarks/bench_render.py --stimuli 100 --stimulus-seconds 10 --jobs 2 --stimulus-style mannequin
@@ -114,20 +114,28 @@ def matplotlib_3d(motion, out, axes_visible: bool = True) -> float:
     return time.perf_counter() - t0
 
 
-def _cpu_ticks(pid: int) -> int | None:
-    """utime + stime of a process in clock ticks (/proc/PID/stat), None when it is gone."""
+def _children(pid: int) -> list[tuple[int, str]]:
+    """(pid, command name) of the child processes of ``pid`` (from /proc)."""
     try:
-        fields = pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except OSError:
-        return None
-    return int(fields[11]) + int(fields[12])
-
-
-def _children(pid: int) -> list[int]:
-    try:
-        return [int(c) for c in pathlib.Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+        children = [int(c) for c in pathlib.Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
     except OSError:
         return []
+    out = []
+    for child in children:
+        try:
+            out.append((child, pathlib.Path(f"/proc/{child}/comm").read_text().strip()))
+        except OSError:
+            continue
+    return out
+
+
+def _rendering(pid: int) -> int:
+    """How many processes of the tree under ``pid`` are writing a video now: a process with an ffmpeg child is
+    (``pid`` itself with --jobs 1, each worker process with --jobs N)."""
+    children = _children(pid)
+    if any(name.startswith("ffmpeg") for _, name in children):
+        return 1
+    return sum(any(name.startswith("ffmpeg") for _, name in _children(child)) for child, _ in children)
 
 
 def stimulus_set(n: int, seconds: float, jobs: int, style: str) -> None:
@@ -157,20 +165,10 @@ def stimulus_set(n: int, seconds: float, jobs: int, style: str) -> None:
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    ticks: dict[int, int] = {}
-    busy_counts, workers = [], set()
+    busy_counts = []
     while proc.poll() is None:
         time.sleep(0.2)
-        busy = 0
-        for child in _children(proc.pid):
-            now = _cpu_ticks(child)
-            if now is None:
-                continue
-            if child in ticks and now - ticks[child] >= 0.05 * os.sysconf("SC_CLK_TCK"):   # >= 25 % of a core
-                busy += 1
-                workers.add(child)
-            ticks[child] = now
-        busy_counts.append(busy)
+        busy_counts.append(_rendering(proc.pid))
     wall = time.perf_counter() - t0
     output = proc.stdout.read() if proc.stdout else ""
     if proc.returncode != 0:
@@ -185,9 +183,8 @@ def stimulus_set(n: int, seconds: float, jobs: int, style: str) -> None:
     print(f"wall {wall:.1f} s = {wall / n:.2f} s per stimulus = {video / wall:.2f}x real time "
           f"({video:g} s of video); CPU {cpu:.1f} s = {cpu / wall:.2f} cores busy on average")
     peak = max(busy_counts, default=0)
-    print(f"worker processes busy at once (sampled every 0.2 s): at most {peak}, "
-          f"{sum(b == jobs for b in busy_counts) / max(len(busy_counts), 1):.0%} of samples with {jobs}; "
-          f"{len(workers)} worker process(es) seen")
+    print(f"processes writing a video at once (sampled every 0.2 s): at most {peak}; {jobs} in "
+          f"{sum(b >= jobs for b in busy_counts) / max(len(busy_counts), 1):.0%} of the samples")
     if n and video / wall > 0:
         print(f"extrapolated: 100 ten-second stimuli in {100 * 10 / (video / wall) / 60:.1f} min at this rate")
 
