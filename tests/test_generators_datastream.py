@@ -70,3 +70,19 @@ def test_rows_mapped_and_release(tmp_path):
         assert np.array_equal(rows[idx[::-1]], x[idx[::-1]])   # read again after the pages were dropped
     finally:
         datastream.RELEASE_BYTES = saved
+
+
+def test_a_pass_over_the_segments_drops_the_pages_it_read(tmp_path):
+    from evalsuite.generators import datastream
+
+    arrays = _segments(4, seed=5)
+    store = SegmentStore(tmp_path / "s.npy", arrays)
+    datastream.RELEASE_BYTES, saved = 64, datastream.RELEASE_BYTES
+    try:
+        released = []
+        store.release = lambda: (released.append(store._read), setattr(store, "_read", 0))  # type: ignore
+        assert np.array_equal(np.concatenate(list(store)), np.concatenate(arrays))
+        assert released and all(r >= 64 for r in released)
+        assert np.array_equal(mean_std(store)[0], np.concatenate(arrays).mean(0))
+    finally:
+        datastream.RELEASE_BYTES = saved

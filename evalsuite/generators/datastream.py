@@ -11,8 +11,8 @@ from the map, and :class:`Rows` the ``(N, D)`` concatenation of a store's rows. 
 function to each segment when it is read (normalised or differenced segments, one at a time).
 
 A map's pages that a process has read count in its resident memory (``ru_maxrss``) until it unmaps them, so a
-store that gathers batches drops them (``madvise(MADV_DONTNEED)``; they stay in the page cache) after every
-:data:`RELEASE_BYTES` read: a pass over a 10-hour corpus holds at most that much of it.
+store drops them (``madvise(MADV_DONTNEED)``; they stay in the page cache) after every :data:`RELEASE_BYTES` it
+hands out (segments or gathered rows): a pass over a 10-hour corpus holds at most about that much of it.
 """
 from __future__ import annotations
 
@@ -93,7 +93,15 @@ class SegmentStore(Sequence[np.ndarray]):
         if not -len(self) <= i < len(self):
             raise IndexError(f"segment {i} of {len(self)}")
         i = i + len(self) if i < 0 else i
+        self._count(int(self.lengths[i]) * self.data.shape[1] * self.data.itemsize)
         return self.data[self.offsets[i]:self.offsets[i + 1]]
+
+    def _count(self, nbytes: int) -> None:
+        """Count bytes handed out; past :data:`RELEASE_BYTES`, drop the pages read so far (views stay valid: a
+        later read takes their pages from the page cache again), so that a pass holds at most that much."""
+        self._read += nbytes
+        if self._read >= RELEASE_BYTES:
+            self.release()
 
     def __iter__(self) -> Iterator[np.ndarray]:
         return (self[i] for i in range(len(self)))
@@ -102,18 +110,12 @@ class SegmentStore(Sequence[np.ndarray]):
         """``data[rows]`` (any integer array of row numbers) as an array in memory; the map's pages are dropped
         from this process's memory after every :data:`RELEASE_BYTES` gathered."""
         out = np.asarray(self.data[rows])
-        self._read += np.asarray(rows).size * max(self.data.shape[1] * self.data.itemsize, _PAGE)
-        if self._read >= RELEASE_BYTES:
-            self.release()
+        self._count(np.asarray(rows).size * max(self.data.shape[1] * self.data.itemsize, _PAGE))
         return out
 
     def take(self, indices: Iterable[int]) -> list[np.ndarray]:
-        """Copies of segments ``indices``, counted as :meth:`gather` counts its rows."""
-        out = [np.array(self[int(i)]) for i in indices]
-        self._read += sum(max(a.nbytes, _PAGE) for a in out)
-        if self._read >= RELEASE_BYTES:
-            self.release()
-        return out
+        """Copies of segments ``indices``."""
+        return [np.array(self[int(i)]) for i in indices]
 
     def release(self) -> None:
         """Drop the pages of the map that this process has read (a later read takes them from the page cache)."""
