@@ -3,17 +3,18 @@
 Set ``EVALSUITE_TIMING_LOG`` to a file path and every request appends one JSON line to it (each process
 opens it in append mode)::
 
-    {"m": "POST", "kind": "answer", "status": 200, "wall": ..., "cpu": ..., "lock": ..., "commit": ...,
-     "sql": ..., "n_tx": ...}
+    {"m": "POST", "kind": "answer", "status": 200, "at": ..., "wall": ..., "cpu": ..., "lock": ...,
+     "commit": ..., "sql": ..., "pool": ..., "held": ...}
 
-all in milliseconds: ``wall`` the request's time inside the app (the WSGI call, which runs the view and builds the body), ``cpu``
-the CPU time of the request's thread, ``lock`` the time spent opening write transactions (on SQLite
-``BEGIN IMMEDIATE``, i.e. waiting for the write lock, including the busy handler's sleeps; on PostgreSQL
-waiting for a pooled connection is in ``pool``), ``commit`` the time in COMMIT (the fsync, and on SQLite an
-automatic WAL checkpoint), ``sql`` the other statements, ``pool`` waiting for a connection from the pool.
-What is left, ``wall - cpu - lock - commit - sql - pool``, is waiting for the interpreter lock (other threads
-of the worker) and for the CPU. The time a request waits before a gunicorn thread takes it is nginx's
-``$upstream_response_time`` minus ``wall`` (``benchmarks/study_load.py --timing`` prints both).
+all times in milliseconds: ``wall`` the request's time inside the app (the WSGI call, which runs the view and
+builds the body), ``cpu`` the CPU time of the request's thread, ``lock`` the wait to open write transactions
+(on SQLite the write queue, :mod:`study_app.storage.writequeue`, and ``BEGIN IMMEDIATE`` with the busy
+handler's sleeps), ``commit`` the time in COMMIT (the fsync, and on SQLite an automatic WAL checkpoint),
+``sql`` the other statements, ``pool`` waiting for a connection from the pool, and ``held`` how long the
+request held the write queue (not a part of ``wall``'s split). What is left, ``wall - cpu - lock - commit -
+sql - pool``, is waiting for the interpreter lock (other threads of the worker) and for the CPU. The time a
+request waits before a gunicorn thread takes it is nginx's ``$upstream_response_time`` minus ``wall``
+(``benchmarks/study_load.py --timing`` prints both).
 """
 from __future__ import annotations
 
