@@ -32,6 +32,7 @@ import argparse
 import os
 import pathlib
 import resource
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -187,6 +188,7 @@ def stimulus_set(n: int, seconds: float, jobs: int, style: str) -> None:
           f"{sum(b >= jobs for b in busy_counts) / max(len(busy_counts), 1):.0%} of the samples")
     if n and video / wall > 0:
         print(f"extrapolated: 100 ten-second stimuli in {100 * 10 / (video / wall) / 60:.1f} min at this rate")
+    shutil.rmtree(root, ignore_errors=True)   # the stimuli (100 x 10 s: tens of MB)
 
 
 def main():
