@@ -139,3 +139,32 @@ def test_window_and_stride_are_configurable_and_the_genea_rule_is_kept():
     np.testing.assert_array_equal(window_starts(100, 30, 15, "complete"), [0, 15, 30, 45, 60])
     np.testing.assert_array_equal(window_starts(105, 30, 15, "genea"), [0, 15, 30, 45, 60])
     np.testing.assert_array_equal(window_starts(105, 30, 15, "complete"), [0, 15, 30, 45, 60, 75])
+
+
+def test_a_still_joint_is_normalised_by_the_std_floor_not_its_own_tiny_std():
+    # Training motion that keeps one joint still (micrometre jitter), as the synthetic speaker keeps its lower
+    # spine: divided by its own std, a generated motion's 1 mm deviation there was ~10^4 standard deviations
+    # and alone made FGD huge. Floored at 1 % of the largest std it counts like any small deviation.
+    from evalsuite.motion.motion import Motion
+
+    rng = np.random.default_rng(0)
+    still = 1
+
+    def with_still_joint(m, offset=0.0):
+        pos = m.positions().copy()
+        pos[:, still] = np.array([0.0, 100.0, 0.0]) + rng.normal(0.0, 1e-5, size=(len(pos), 3)) + offset
+        return Motion.from_positions(pos, m.joint_names, m.fps, parents=m.skeleton.parents)
+
+    nat = {n: with_still_joint(m) for n, m in natural().items()}
+    model = train_model(nat, joints="all", window=WINDOW, fps=FPS, epochs=2, seed=0, progress=False)
+    floor = 0.01 * model.std.max()
+    column = 3 * model.meta["representation"]["joints"].index(natural()["take00"].joint_names[still])
+    assert np.all(model.std[column: column + 3] == floor)
+    assert model.meta["normalization"]["dims_at_std_floor"] >= 3
+    names = sorted(nat)
+    ref = {n: nat[n] for n in names[:4]}
+    same = {n: nat[n] for n in names[4:]}
+    shifted = {n: with_still_joint(natural()[n], offset=0.1) for n in names[4:]}  # 1 mm off, still joint only
+    rows = score_fgd(model, ref, {"same": same, "shifted": shifted}, raw=False, n_bootstrap=20, seed=1)
+    fgd = {r["condition"]: r["value"] for r in rows if r["metric"] == "fgd"}
+    assert fgd["shifted"] < fgd["same"] + 5.0, fgd

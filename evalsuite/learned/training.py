@@ -26,9 +26,12 @@ from evalsuite.learned.network import Architecture, EmbeddingNet
 from evalsuite.learned.presets import architecture_preset, resolve_joint_spec
 from evalsuite.learned.representation import REPRESENTATIONS, cut_windows, default_bones, pose_vectors
 
-# Dimensions whose training std is below this fraction of the largest std are constant in
-# practice (e.g. a fixed world joint); they get std 1 so normalisation does not blow them up.
-CONSTANT_STD_FRACTION = 1e-8
+# Positions are divided by their training std, floored at this fraction of the largest dimension's std. A joint
+# that the training motion keeps (almost) still, e.g. a lower spine joint, has a std of micrometres: divided by
+# it, a generated motion's millimetre deviation there became thousands of standard deviations and alone made FGD
+# 19,200 for a model whose motion was ordinary (Ferstl et al.'s re-implementation; issue 39). The floor is
+# relative, so it does not depend on the units (cm or m).
+STD_FLOOR_FRACTION = 0.01
 
 
 def reconstruction_loss(target: torch.Tensor, recon: torch.Tensor) -> torch.Tensor:
@@ -119,10 +122,12 @@ def train_model(sequences, *, joints="all", window: int = 30, stride: int | None
     mean = all_frames.mean(axis=0)
     if representation == "bone_directions":
         std = np.ones_like(mean)  # Yoon et al. subtract the mean direction only
+        floored = np.zeros(mean.shape, dtype=bool)
     else:
         std = all_frames.std(axis=0)
-        constant = std <= CONSTANT_STD_FRACTION * max(std.max(), 1e-300)
-        std[constant] = 1.0
+        floor = STD_FLOOR_FRACTION * std.max() if std.max() > 0 else 1.0
+        floored = std < floor
+        std = np.maximum(std, floor)
 
     arch = Architecture(pose_dim=train_raw.shape[2], window=window, **architecture_preset(architecture))
     train_x = torch.from_numpy(((train_raw - mean) / std).astype(np.float32))
@@ -172,7 +177,8 @@ def train_model(sequences, *, joints="all", window: int = 30, stride: int | None
     }
     normalization = {"source": "training frames: mean and population std per dimension"
                                + (" (std fixed to 1, as Yoon et al.)" if representation == "bone_directions" else ""),
-                     "constant_dims_std_set_to_1": int(constant.sum()) if representation == "positions" else 0}
+                     "std_floor": (f"{STD_FLOOR_FRACTION:g} x the largest std" if representation == "positions" else None),
+                     "dims_at_std_floor": int(floored.sum()) if representation == "positions" else 0}
     meta = new_meta(arch, rep, fps, stride, "complete", normalization, provenance, int(seed))
     return FeatureModel(net, meta, mean, std)
 
