@@ -31,7 +31,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
-from evalsuite.generators.datastream import SegmentStore, release
+from evalsuite.generators.datastream import RELEASE_BYTES, SegmentStore, release
 from evalsuite.generators.gesture2vec.info import DEVIATIONS as CORE_DEVIATIONS
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
@@ -79,13 +79,24 @@ def _word_track(transcript: Transcript | None, embedder: Any) -> list[tuple[np.n
 
 
 def _save_pool(path: pathlib.Path, pool: dict[int, list[np.ndarray]]) -> None:
-    """``np.savez(path, code_K=np.stack(clips of code K), ...)``, one code's clips in memory at a time (the
-    clips are views of a memory-mapped file, whose pages are dropped after each code)."""
+    """What ``np.savez(path, code_K=np.stack(clips of code K), ...)`` saves, one clip in memory at a time: each
+    entry's ``.npy`` header, then its clips' bytes (the clips are views of a memory-mapped file, whose pages are
+    dropped every 64 MB written; one code may hold most of the pool)."""
     with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
         for k, clips in pool.items():
+            first = np.asarray(clips[0])
+            header = {"descr": np.lib.format.dtype_to_descr(first.dtype), "fortran_order": False,
+                      "shape": (len(clips), *first.shape)}
             with zf.open(f"code_{k}.npy", "w", force_zip64=True) as fh:
-                np.lib.format.write_array(fh, np.stack(clips), allow_pickle=False)
-            release(clips[0])
+                np.lib.format.write_array_header_1_0(fh, header)
+                written = 0
+                for clip in clips:
+                    fh.write(np.ascontiguousarray(clip, first.dtype).tobytes())
+                    written += clip.nbytes
+                    if written >= RELEASE_BYTES:
+                        release(clip)
+                        written = 0
+            release(first)
 
 
 class Gesture2Vec(Generator):
