@@ -14,12 +14,10 @@ and one MSE correction step (with the discontinuity penalty between consecutive 
 steps.
 
 With ``budget_seconds`` each stage must end by a cumulative share of the budget (``MoganStages.budget_shares``:
-classifier 15 %, MSE pre-training to 45 %, discriminator pre-training to 55 %, adversarial training to 100 %;
-time a stage leaves unused goes to the later ones); a stage that reaches its deadline stops, the next starts,
-and its last history row says ``"stopped": "time budget"`` (the names are in ``TrainedMogan.stopped``).
-
-The training split is memory-mapped (:mod:`evalsuite.generators.datastream`, batches gathered from the maps,
-statistics one segment at a time), so that memory does not grow with hours of corpus.
+classifier 15 %, MSE pre-training to 45 %, discriminator pre-training to 55 %, adversarial training to 100 %; time
+a stage leaves unused goes to the later ones); a stage at its deadline stops, the next starts, and its last history
+row says ``"stopped": "time budget"`` (names in ``TrainedMogan.stopped``). The training split is memory-mapped
+(:mod:`evalsuite.generators.datastream`), so that memory does not grow with hours of corpus.
 """
 from __future__ import annotations
 
@@ -62,9 +60,9 @@ class MoganStages:
     batch_size: int = 32
     learning_rate: float = 1e-3
     adversarial_learning_rate: float = 1e-4
-    # RMSprop rate of the discriminators in adversarial training; None: adversarial_learning_rate. The paper gives
-    # no rates. At the generator's rate the discriminators won within 100 steps (displacement accuracy 97-100 %)
-    # and the generator's motion shrank below the MSE-only model's (div_k 1.3 against 2.9, natural 10.3).
+    # RMSprop rate of the discriminators in adversarial training (None: adversarial_learning_rate; the paper gives no
+    # rates). At the generator's rate they won within 100 steps (displacement accuracy 97-100 %) and the motion
+    # shrank below the MSE-only model's (div_k 1.3 against 2.9, natural 10.3).
     discriminator_learning_rate: float | None = None
     discontinuity_weight: float = 1.0
     scale_floor: float = 0.0           # a position's std is at least this fraction of the widest one's
@@ -94,10 +92,8 @@ def weighted_f1(true: np.ndarray, pred: np.ndarray, n_classes: int) -> float:
         tp = np.sum((pred == k) & (true == k))
         fp = np.sum((pred == k) & (true != k))
         fn = np.sum((pred != k) & (true == k))
-        support = tp + fn
-        if support:
-            f1 = 2 * tp / max(2 * tp + fp + fn, 1)
-            score += f1 * support
+        if support := tp + fn:
+            score += 2 * tp / max(2 * tp + fp + fn, 1) * support   # the class's F1 x its support
             total += support
     return float(score / max(total, 1))
 
