@@ -22,7 +22,6 @@ import threading
 import time
 import weakref
 
-from sqlalchemy import text
 from sqlalchemy.exc import DBAPIError, IntegrityError
 
 __all__ = ["MediaLog"]
@@ -35,7 +34,9 @@ INSERT_SERVED = ("INSERT INTO media_served (session_id, page_index, slot, first_
 
 class MediaLog:
     def __init__(self, engine, session_factory, model, access_log: str | None = None) -> None:
-        """``access_log``: nginx's media log to read on :meth:`flush` (default ``EVALSUITE_MEDIA_ACCESS_LOG``)."""
+        """``session_factory``: sessions whose writes need no fsync of their own (the store's ``RelaxedSession``:
+        on PostgreSQL ``synchronous_commit`` off); ``access_log``: nginx's media log to read on :meth:`flush`
+        (default ``EVALSUITE_MEDIA_ACCESS_LOG``)."""
         from study_app.storage.tables import MediaServed  # not at the top: the storage package imports this
         self.engine, self.Session, self.model, self.served_model = engine, session_factory, model, MediaServed
         self.access_log = access_log or os.environ.get("EVALSUITE_MEDIA_ACCESS_LOG") or None
@@ -57,8 +58,7 @@ class MediaLog:
                     self._defer(INSERT, row)
             elif self.engine.dialect.name == "postgresql":
                 from sqlalchemy.dialects.postgresql import insert as pg_insert
-                with self.Session.begin() as db:
-                    db.execute(text("SET LOCAL synchronous_commit TO OFF"))
+                with self.Session.begin() as db:      # relaxed: synchronous_commit off (the engine)
                     db.execute(pg_insert(self.model).values(session_id=session_id, page_index=page_index,
                                                             slot=slot, first_at=now).on_conflict_do_nothing())
             else:
@@ -113,9 +113,7 @@ class MediaLog:
     def insert_served(self, rows: list) -> None:
         """Write ``media_served`` rows in one transaction (PostgreSQL: without waiting for the disk)."""
         names = ("session_id", "page_index", "slot", "first_byte", "last_byte", "total", "status", "served_at")
-        with self.Session.begin() as db:
-            if self.engine.dialect.name == "postgresql":
-                db.execute(text("SET LOCAL synchronous_commit TO OFF"))
+        with self.Session.begin() as db:          # relaxed: synchronous_commit off (the engine)
             db.add_all([self.served_model(**dict(zip(names, row))) for row in rows])
 
     def _defer(self, sql: str, row: tuple) -> None:

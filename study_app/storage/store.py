@@ -52,14 +52,14 @@ class Store:
         self.rules = rules or Rules()
         self.entry_pages = entry_pages
         self.Session = sessionmaker(engine, expire_on_commit=False)
-        self.media_log = MediaLog(engine, self.Session, MediaRequest)
         # For reads only: never writes, so on SQLite it does not take the write lock.
         self.ReadSession = sessionmaker(engine.execution_options(evalsuite_readonly=True),
                                         expire_on_commit=False)
-        # For records that acknowledge nothing (a page's first view): on SQLite no fsync of their own
+        # For records that acknowledge nothing (a page's first view, the media log): no fsync of their own
         # (study_app.storage.engine, "evalsuite_relaxed").
         self.RelaxedSession = sessionmaker(engine.execution_options(evalsuite_relaxed=True),
                                            expire_on_commit=False)
+        self.media_log = MediaLog(engine, self.RelaxedSession, MediaRequest)
         self.is_postgres = engine.dialect.name == "postgresql"
 
     def _locked(self, stmt):
