@@ -114,12 +114,13 @@ class VideoWriter:
             self._thread.join()
             self._gen.close()
             self._gen = None
-            if self._error is not None:
-                raise self._error
         if self._wav is not None:
             with contextlib.suppress(OSError):
                 os.remove(self._wav)
             self._wav = None
+        if self._error is not None:          # after the temporary WAV is gone; raised once
+            error, self._error = self._error, None
+            raise error
 
     def __enter__(self):
         return self
