@@ -13,8 +13,9 @@ package the first time anything asks for one of its attributes (the stick figure
 character, pyrender's shadow pass); only ``trimesh.transformations`` (numpy only), which pyrender's nodes use
 directly, is loaded at once.
 
-Also here: the cached offscreen contexts, our colour-only framebuffer read and the shader
-cache that draws meshes with the cheap ``shaders/stick.*`` program.
+Also here: the cached offscreen contexts, our colour-only framebuffer read (of the redrawn rectangle only),
+the shader cache that draws meshes with the cheap ``shaders/stick.*`` program, and the replay of a clip's draw
+calls that spares pyrender's per-frame set-up after the first frame.
 """
 from __future__ import annotations
 
@@ -121,19 +122,93 @@ def set_samples(samples: int) -> None:
 
 def _read_colour_only(self, scene, flags):
     """Replacement for pyrender's framebuffer read: colour only (its depth read costs more
-    than drawing a stick figure)."""
+    than drawing a stick figure), and only the rectangle ``self._evalsuite_read_rect`` (``(x, y, w, h)``, GL
+    rows from the bottom; None: all) that this frame redrew, into a frame kept on the context: outside it
+    the framebuffer, and so the kept frame, still hold what the last read saw (see ``FigureRenderer._scissor``).
+    Returns a copy ``(H, W, 3)`` uint8, top row first."""
     from OpenGL import GL
 
     width, height = self._main_fb_dims
-    GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self._main_fb_ms)
-    # Without multisampling the 'multisample' buffer is a plain one and is read directly
-    # (a blit on llvmpipe is a full-screen draw, ~2 ms at 640x480).
-    if getattr(self, "samples", 4) != 0:
-        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self._main_fb)
-        GL.glBlitFramebuffer(0, 0, width, height, 0, 0, width, height, GL.GL_COLOR_BUFFER_BIT, GL.GL_LINEAR)
-        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self._main_fb)
-    buf = GL.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
-    return np.frombuffer(buf, dtype=np.uint8).reshape(height, width, 3)[::-1], None
+    rect = getattr(self, "_evalsuite_read_rect", None)
+    frame = getattr(self, "_evalsuite_frame", None)
+    if rect is None or frame is None or frame.shape != (height, width, 3):
+        rect = (0, 0, width, height)
+        frame = self._evalsuite_frame = np.empty((height, width, 3), dtype=np.uint8)
+    x, y, w, h = rect
+    if w > 0 and h > 0:
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self._main_fb_ms)
+        # Without multisampling the 'multisample' buffer is a plain one and is read directly
+        # (a blit on llvmpipe is a full-screen draw, ~2 ms at 640x480).
+        if getattr(self, "samples", 4) != 0:
+            GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self._main_fb)
+            GL.glBlitFramebuffer(x, y, x + w, y + h, x, y, x + w, y + h, GL.GL_COLOR_BUFFER_BIT, GL.GL_LINEAR)
+            GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self._main_fb)
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        buf = GL.glReadPixels(x, y, w, h, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
+        frame[y:y + h, x:x + w] = np.frombuffer(buf, dtype=np.uint8).reshape(h, w, 3)
+    return frame[::-1].copy(), None
+
+
+def capture_draws(pr, inner, scene, flags):
+    """``(program id, [(vertex array, mode, index count), ...])`` of the pass pyrender just drew, or None.
+
+    pyrender's forward pass sets every uniform, texture and GL flag again for each primitive of each frame:
+    about 2 ms of Python per frame, more than llvmpipe takes to draw a stick figure. Within one
+    :class:`~renderers.scene.FigureRenderer` they are the same in every frame (one camera, one light rig, one
+    material, identity node poses, no texture), and a GL program keeps its uniforms, so the next frames can
+    be drawn from this list by :func:`replay_draws` after the vertex buffers were overwritten. None where
+    that does not hold (a texture, a second material, a posed node, instancing, another program): pyrender
+    then draws every frame.
+    """
+    from pyrender.constants import ProgramFlags
+
+    program_id, material, draws = None, None, []
+    for node in inner._sorted_mesh_nodes(scene):
+        if not node.mesh.is_visible:
+            continue
+        if not np.array_equal(scene.get_pose(node), np.eye(4)):
+            return None
+        for prim in node.mesh.primitives:
+            if prim.indices is None or prim.poses is not None or prim.material.tex_flags:
+                return None
+            if material is not None and prim.material is not material:
+                return None
+            material = prim.material
+            program = inner._get_primitive_program(prim, flags | pr.RenderFlags.OFFSCREEN, ProgramFlags.USE_MATERIAL)
+            if program_id is not None and program._program_id != program_id:
+                return None
+            program_id = program._program_id
+            draws.append((prim._vaid, prim.mode, prim.indices.size))
+    return (program_id, draws) if draws else None
+
+
+def replay_draws(offscreen, captured, clear_color, scissor) -> np.ndarray:
+    """Draw ``captured`` (see :func:`capture_draws`) again into the offscreen framebuffer and read the colour:
+    a clear and one draw call per primitive, with the GL state pyrender's last pass left (depth test, culling,
+    blending, the program's uniforms). ``scissor``: the ``(x, y, w, h)`` to redraw, or None for all."""
+    from OpenGL import GL
+
+    inner = offscreen._renderer
+    program_id, draws = captured
+    offscreen._platform.make_current()
+    GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, inner._main_fb_ms)
+    if scissor is not None:
+        GL.glEnable(GL.GL_SCISSOR_TEST)
+        GL.glScissor(*scissor)
+    try:
+        GL.glClearColor(*clear_color)
+        GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+        GL.glUseProgram(program_id)
+        for vertex_array, mode, count in draws:
+            GL.glBindVertexArray(vertex_array)
+            GL.glDrawElements(mode, count, GL.GL_UNSIGNED_INT, ctypes.c_void_p(0))
+        GL.glBindVertexArray(0)
+        GL.glUseProgram(0)
+        color, _ = _read_colour_only(inner, None, None)
+    finally:
+        if scissor is not None:
+            GL.glDisable(GL.GL_SCISSOR_TEST)
+    return color
 
 
 _CONTEXTS: dict = {}

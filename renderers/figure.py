@@ -104,7 +104,7 @@ DEFAULT_TESSELLATION = (1, 10)   # FigureStyle's sphere_subdivisions, cylinder_s
 
 def templates_from_trimesh(sphere_subdivisions: int, cylinder_sections: int) -> dict[str, np.ndarray]:
     """The stick figure's unit parts from trimesh: joint sphere ``s*`` (``icosphere(subdivisions)``), head
-    sphere ``h*`` (``icosphere(subdivisions + 2)``) and bone cylinder ``c*`` (radius 1, z from 0 at the parent to
+    sphere ``h*`` (``icosphere(subdivisions + 1)``) and bone cylinder ``c*`` (radius 1, z from 0 at the parent to
     1 at the child); ``*v`` vertices (V, 3), ``*n`` vertex normals (V, 3), ``*f`` faces (K, 3)."""
     import trimesh
 
@@ -112,7 +112,7 @@ def templates_from_trimesh(sphere_subdivisions: int, cylinder_sections: int) -> 
     cyl.apply_translation([0.0, 0.0, 0.5])
     out = {}
     for key, mesh in (("s", trimesh.creation.icosphere(subdivisions=sphere_subdivisions, radius=1.0)),
-                      ("h", trimesh.creation.icosphere(subdivisions=sphere_subdivisions + 2, radius=1.0)),
+                      ("h", trimesh.creation.icosphere(subdivisions=sphere_subdivisions + 1, radius=1.0)),
                       ("c", cyl)):
         out[key + "v"], out[key + "n"] = np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals)
         out[key + "f"] = np.asarray(mesh.faces)

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from evalsuite.errors import InputError
-from renderers._gl import import_pyrender, offscreen_renderer, set_samples
+from renderers._gl import capture_draws, import_pyrender, offscreen_renderer, replay_draws, set_samples
 from renderers.camera import FRAMINGS, UP_AXES, VIEWS, Camera, _unit
 from renderers.figure import FigureStyle, srgb_to_linear
 from renderers.framing import View, make_view
@@ -212,6 +212,10 @@ class FigureRenderer:
         inner = self._renderer._renderer
         inner._program_cache.full_shading = self.settings.style.shadow
         scissor = self._scissor(inner, vertices)
+        inner._evalsuite_read_rect = scissor   # the read copies just this rectangle (renderers._gl)
+        if entry.get("replay") is not None and getattr(inner, "_evalsuite_owner", None) == self._token:
+            # the last pass on this context was ours: same uniforms, only the vertex buffer changed
+            return replay_draws(self._renderer, entry["replay"], self.scene.bg_color, scissor)
         try:
             if scissor is not None:
                 self._renderer._platform.make_current()
@@ -223,6 +227,8 @@ class FigureRenderer:
                 self._renderer._platform.make_current()
                 GL.glDisable(GL.GL_SCISSOR_TEST)
                 self._renderer._platform.make_uncurrent()
+        inner._evalsuite_owner = self._token
+        entry["replay"] = None if self.settings.style.shadow else capture_draws(pr, inner, self.scene, flags)
         return color
 
     def _scissor(self, inner, vertices):

@@ -346,3 +346,39 @@ def test_video_writer_sends_frames_from_a_thread_and_copies_them(tmp_path):
     means = [float(frame.mean()) for _, frame in read_video_frames(tmp_path / "v.mp4")]
     assert len(means) == len(levels)
     np.testing.assert_allclose(means, levels, atol=3)
+
+
+@pytest.mark.parametrize("body", ["stick", "mannequin"])
+def test_replayed_draws_and_partial_reads_give_pyrenders_own_frames(monkeypatch, tmp_path, body):
+    """After a clip's first frame each frame is drawn by replaying the captured draw calls and only the redrawn
+    rectangle is read back (renderers._gl): two panels taking turns on one context (the compositor's case, where a
+    frame buffer reused between panels would show the other panel) give the frames of pyrender's full pass."""
+    import renderers.scene as scene
+
+    pos = waving_motion(1.0, 30.0, amplitude=60.0, shift=(0.0, 0.0, 0.0)).positions().copy()
+    pos[:, :, 0] += np.linspace(-40, 40, len(pos))[:, None]   # the figure also travels sideways
+    motions = [Motion.from_positions(pos, NAMES, 30.0, PARENTS), Motion.from_positions(pos[::-1], NAMES, 30.0, PARENTS)]
+    settings = RenderSettings(width=128, height=96, body=body)
+
+    def frames(tmp):
+        out = []
+        render_video(motions, tmp, settings, frame_filter=lambda i, f: out.append(f.copy()) or f)
+        return out
+
+    replayed = []
+    replay = scene.replay_draws
+    monkeypatch.setattr(scene, "replay_draws", lambda *a: replayed.append(1) or replay(*a))
+    fast = frames(tmp_path / "fast.mp4")
+    assert len(replayed) >= 2 * len(fast) - 2, "every frame after the first of each panel is a replay"
+    original_init = scene.FigureRenderer.__init__
+
+    def full_pass(self, *args, **kwargs):
+        original_init(self, *args, **kwargs)
+        self.partial_redraw = False
+
+    monkeypatch.setattr(scene, "capture_draws", lambda *a: None)
+    monkeypatch.setattr(scene.FigureRenderer, "__init__", full_pass)
+    slow = frames(tmp_path / "slow.mp4")
+    assert len(fast) == len(slow) == len(pos)
+    for k, (a, b) in enumerate(zip(fast, slow)):
+        np.testing.assert_array_equal(a, b, err_msg=f"frame {k}")
