@@ -52,6 +52,7 @@ def import_pyrender():
         _PATCHED = True
     if "pyrender" not in sys.modules:
         _defer_trimesh()
+        _defer_viewer()
     import pyrender
     import pyrender.renderer
 
@@ -100,6 +101,43 @@ def _defer_trimesh() -> None:
 
 
 _SAMPLES = threading.local()
+
+
+class _DeferredViewerModule(types.ModuleType):
+    """Stands in for ``pyrender.viewer`` (an interactive window: pyglet, tkinter; about 70 ms of a rendering
+    command's start, which never opens one) until one of its names is asked for."""
+
+    def __getattr__(self, name):
+        if name.startswith("__"):   # the import system's probes (``__path__``: is it a package?)
+            raise AttributeError(name)
+        return getattr(_load_viewer(), name)
+
+
+class _DeferredViewer:
+    """``pyrender.Viewer`` while the viewer module is deferred: opening one imports the real module."""
+
+    def __new__(cls, *args, **kwargs):
+        return _load_viewer().Viewer(*args, **kwargs)
+
+
+def _load_viewer() -> types.ModuleType:
+    """Import the real ``pyrender.viewer`` in place of the stand-in (once) and return it."""
+    with _TRIMESH_LOCK:
+        if isinstance(sys.modules.get("pyrender.viewer"), _DeferredViewerModule):
+            del sys.modules["pyrender.viewer"]
+            real = importlib.import_module("pyrender.viewer")
+            package = sys.modules["pyrender"]
+            package.viewer, package.Viewer = real, real.Viewer
+        return sys.modules["pyrender.viewer"]
+
+
+def _defer_viewer() -> None:
+    """Put a :class:`_DeferredViewerModule` in ``sys.modules`` before pyrender's package imports its viewer."""
+    if "pyrender.viewer" in sys.modules or importlib.util.find_spec("pyrender") is None:
+        return
+    stand_in = _DeferredViewerModule("pyrender.viewer", "pyrender's viewer, loaded on first use (renderers._gl)")
+    stand_in.Viewer = _DeferredViewer
+    sys.modules["pyrender.viewer"] = stand_in
 
 
 def _install_samples_hook(module):
