@@ -127,7 +127,7 @@ def _load_viewer() -> types.ModuleType:
             del sys.modules["pyrender.viewer"]
             real = importlib.import_module("pyrender.viewer")
             package = sys.modules["pyrender"]
-            package.viewer, package.Viewer = real, real.Viewer
+            vars(package).update(viewer=real, Viewer=real.Viewer)
         return sys.modules["pyrender.viewer"]
 
 
@@ -136,7 +136,7 @@ def _defer_viewer() -> None:
     if "pyrender.viewer" in sys.modules or importlib.util.find_spec("pyrender") is None:
         return
     stand_in = _DeferredViewerModule("pyrender.viewer", "pyrender's viewer, loaded on first use (renderers._gl)")
-    stand_in.Viewer = _DeferredViewer
+    vars(stand_in)["Viewer"] = _DeferredViewer
     sys.modules["pyrender.viewer"] = stand_in
 
 
