@@ -24,7 +24,7 @@ from evalsuite.errors import InputError
 from renderers.camera import UP_AXES, Camera, frame_points, view_direction
 from renderers.figure import body_size, forward_direction, head_index, head_marker_centres, leg_mask
 from renderers.styles import STYLES
-from renderers.styles.bones import BELOW_KNEE, joint_kinds
+from renderers.styles.bones import BELOW_KNEE, body_scale, has_legs, joint_kinds
 
 if TYPE_CHECKING:
     from renderers.scene import RenderSettings
@@ -49,10 +49,14 @@ class View:
         return cls(Camera.from_dict(d["camera"]), float(d["size"]), d["floor_height"], tuple(d["floor_centre"]))
 
 
-def floor_on(settings: RenderSettings) -> bool:
-    """Whether a floor is drawn: the style setting, or when unset (None) the body style's default."""
+def floor_on(settings: RenderSettings, names_sets=None, parents_sets=None) -> bool:
+    """Whether a floor is drawn: the style setting, or when unset (None) the body style's default, except under
+    skeletons none of which has legs (an upper body standing on a floor looks like a chess piece)."""
     if settings.style.floor is not None:
         return bool(settings.style.floor)
+    known = [(n, p) for n, p in zip(names_sets or [], parents_sets or []) if p is not None]
+    if known and not any(has_legs(joint_kinds(n, p)) for n, p in known):
+        return False
     return bool(getattr(STYLES[settings.body], "floor", False))
 
 
@@ -60,6 +64,10 @@ def framed_mask(positions: np.ndarray, names, parents, up: np.ndarray, framing: 
     """The joints the camera frames under ``framing`` (see the module doc)."""
     if framing == "full":
         return np.ones(positions.shape[1], dtype=bool)
+    if parents is not None:
+        kinds = joint_kinds(names, parents)
+        if not has_legs(kinds) and {"shoulder", "neck"} & set(kinds):
+            return np.ones(positions.shape[1], dtype=bool)   # an upper body: no leg to leave out
     if framing == "upper":
         legs = leg_mask(names)
         keep, share, named = ~legs, 0.55, bool(legs.any() and not legs.all())
@@ -112,16 +120,18 @@ def make_view(position_sets, names_sets, settings: RenderSettings, parents_sets=
             head = head_index(names)
             if head is not None:
                 hp = int(parents[head]) if parents is not None else -1
-                centres = head_marker_centres(pos, head, hp, style.head_radius * size)
+                # a body's head is as big as its stature says, also on an upper body (styles.bones.body_scale)
+                scale = size if settings.body == "stick" or parents is None else body_scale(names, parents, pos, size)
+                r = style.head_radius * scale
+                centres = head_marker_centres(pos, head, hp, r)
                 # the head's extreme points along the world axes (it is much bigger than a joint)
-                r = style.head_radius * size
                 offsets = np.concatenate([np.eye(3), -np.eye(3)]) * r
                 pts.append((centres[:, None, :] + offsets[None]).reshape(-1, 3))
         roots.append(np.nanmean(pos[:, _root_index(parents)], axis=0))
         if hasattr(body, "frame_points"):   # parts of the body well beyond its joints (the mannequin's mittens)
             pts.append(np.asarray(body.frame_points(pos, names, parents, size), float).reshape(-1, 3))
         pts.append(pos[:, framed_mask(pos, names, parents, up, settings.framing)].reshape(-1, 3))
-    floor = floor_on(settings)
+    floor = floor_on(settings, names_sets, parents_sets)
     if floor and settings.framing == "full":   # the feet stand on the floor inside the picture
         lowest = min(float(np.nanmin(np.asarray(p, float) @ up)) for p in position_sets)
         ground = np.nanmean(roots, axis=0)

@@ -101,3 +101,15 @@ def genea2023_standin(seconds=1.0, fps=30.0) -> Motion:
         values[:, start[f"b_{s}_arm"]] = sign * 70.0                              # Zrotation: arms down
         values[:, start[f"b_{s}_forearm"] + 1] = 30.0 * np.sin(2 * np.pi * 1.5 * t)   # Xrotation: wave
     return Motion(skeleton, values, fps, name="genea2023_standin")
+
+
+def upper_body(seconds=0.5, fps=30.0) -> Motion:
+    """The first ten joints of :data:`NAMES` (hips to wrists, no legs) with the arms hanging: an upper-body
+    skeleton like GENEA 2020's (torso 50 cm, shoulders 30 cm apart; its extent, 65 cm, is far below its stature)."""
+    rest = TPOSE[:10].copy()
+    rest[1, 1] = 110.0     # the spine joint near the pelvis (else the root reads as a world root: renderers.skeleton)
+    rest[4:10] = [[15, 148, 0], [18, 120, 3], [20, 95, 6], [-15, 148, 0], [-18, 120, 3], [-20, 95, 6]]
+    n = int(round(seconds * fps))
+    pos = np.repeat(rest[None], n, axis=0)
+    pos[:, 6, 1] += 10 * np.sin(np.linspace(0, np.pi, n))     # the left wrist lifts a little
+    return Motion.from_positions(pos, NAMES[:10], fps, PARENTS[:10])

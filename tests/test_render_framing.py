@@ -69,3 +69,26 @@ def test_framed_joints_of_each_framing_by_name_and_without_names():
     anonymous = [f"joint{j}" for j in range(len(NAMES))]
     knees = framed_mask(pos, anonymous, PARENTS, UP, "above-knees")
     assert not knees[NAMES.index("LeftAnkle")] and knees[NAMES.index("LeftKnee")] and knees[NAMES.index("Hips")]
+
+
+@pytest.mark.parametrize("body", ["mannequin", "character"])
+def test_an_upper_body_fills_its_frame_with_its_head_in_it_and_no_floor(body):
+    """A skeleton without legs: no floor under it (unless asked), every framing frames all of it (there is no leg to
+    leave out), and the head, as big as the body's stature makes it, stays inside the picture."""
+    from render_helpers import upper_body
+
+    motion = upper_body()
+    for framing in ("full", "above-knees", "upper"):
+        assert framed_mask(motion.positions(), motion.joint_names, motion.parents, np.array([0.0, 1.0, 0.0]),
+                           framing).all()
+    settings = RenderSettings(width=160, height=120, body=body)
+    m = prepare_motions([motion], settings)[0]
+    assert view_for([m], settings).floor_height is None
+    assert view_for([m], RenderSettings(body=body, style=FigureStyle(floor=True))).floor_height is not None
+    img = render_frames([m], settings)[0].astype(int)
+    figure = np.abs(img - img[0, 0]).max(axis=-1) > 30
+    rows = np.flatnonzero(figure.any(axis=1))
+    assert rows[0] > 2, "the head is inside the picture, not cut at its top"
+    assert not figure[0].any() and not figure[:, 0].any() and not figure[:, -1].any()
+    cols = np.flatnonzero(figure.any(axis=0))
+    assert abs((cols[0] + cols[-1]) / 2 - 80) < 12, "centred"

@@ -186,3 +186,28 @@ def test_partial_redraw_over_the_floor_leaves_no_trace_of_earlier_frames():
     for k in (3, moving.n_frames - 1):
         fresh = render_frames([moving], settings, view=view, frames=[k])[0]
         np.testing.assert_array_equal(sequence[k], fresh)
+
+
+def test_an_upper_body_is_as_thick_as_the_whole_body_it_comes_from():
+    """Part sizes are fractions of the body's stature: for a skeleton without legs (its extent is its torso and
+    arms) the stature its torso and shoulder span suggest (styles.bones.body_scale), not its extent, so the torso,
+    head and limbs keep a body's proportions instead of becoming a slim pole."""
+    from render_helpers import upper_body
+
+    from renderers.figure import body_size
+    from renderers.styles.bones import body_scale
+
+    upper = upper_body()
+    whole = np.concatenate([upper.positions()[0], TPOSE[10:]])[None]   # the same body with its legs
+    assert body_size(upper.positions()) < 75 and body_size(whole) > 155
+    assert body_scale(NAMES, PARENTS, whole, 160.0) == 160.0, "a body with legs: its extent is its stature"
+    scale = body_scale(upper.joint_names, upper.parents, upper.positions(), body_size(upper.positions()))
+    assert 150 < scale < 175      # median of 50 / 0.288 and 30 / 0.20
+    mesh_upper = MannequinMesh(upper.joint_names, upper.parents, upper.positions(), body_size(upper.positions()))
+    mesh_whole = MannequinMesh(NAMES, PARENTS, whole, body_size(whole))
+    assert abs(mesh_upper.size / mesh_whole.size - 1) < 0.1
+
+    def torso_half_width(mesh):   # the widest lateral semi-axis of the torso's parts
+        return max(np.abs(parts.offsets[..., 0]).max() for kind, _, parts in mesh._groups if kind == "trunk")
+
+    assert torso_half_width(mesh_upper) > 0.8 * torso_half_width(mesh_whole) > 10   # (0.4 x before body_scale)

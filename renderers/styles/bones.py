@@ -31,6 +31,8 @@ import re
 
 import numpy as np
 
+from renderers.figure import LEFT, RIGHT, joint_sides
+
 _KINDS = [
     ("finger", r"thumb|index|middle|ring|pinky|little|finger"),
     ("forearm_mid", r"wrist_?twist|(forearm|lowerarm)_?(twist|roll)"),
@@ -112,3 +114,36 @@ def bone_classes(names, parents, lengths, size: float) -> list[str]:
             length = float(lengths[j]) / size
             out.append("finger" if length < 0.06 else "forearm" if length < 0.18 else "upperarm")
     return out
+
+
+# Stature fractions (Drillis and Contini's segment proportions, as tabulated in Winter's "Biomechanics and Motor
+# Control of Human Movement"): the hip joint at 0.530 and the shoulder at 0.818 of stature (torso 0.288); the
+# shoulder joints' centres about 0.2 of stature apart.
+TORSO_PER_STATURE, SHOULDERS_PER_STATURE = 0.288, 0.20
+
+
+def has_legs(kinds) -> bool:
+    """Whether a skeleton of these joint kinds has legs (a knee, ankle or toe joint)."""
+    return any(k in ("knee", "ankle", "toe") for k in kinds)
+
+
+def body_scale(names, parents, positions, size: float) -> float:
+    """The length a body's part sizes are fractions of: ``size`` (the figure's largest extent, about its stature)
+    for a skeleton with legs; for an upper body, whose extent is far below its stature, at least the stature its
+    torso (pelvis to neck, 0.288 of stature) and shoulder span (0.20) suggest (their median), so an upper body is
+    as thick as the whole body of the same person would be. ``positions`` ``(T, J, 3)``."""
+    kinds = joint_kinds(names, parents)
+    if has_legs(kinds) or not len(positions):
+        return float(size)
+    med = np.nan_to_num(np.nanmedian(np.asarray(positions, float), axis=0))
+    estimates = []
+    pelvis = next((j for j, k in enumerate(kinds) if k == "pelvis"), None)
+    neck = next((j for j, k in enumerate(kinds) if k == "neck"), None)
+    if pelvis is not None and neck is not None:
+        estimates.append(np.linalg.norm(med[neck] - med[pelvis]) / TORSO_PER_STATURE)
+    sides = joint_sides(names)
+    left = [j for j, k in enumerate(kinds) if k == "shoulder" and sides[j] == LEFT]
+    right = [j for j, k in enumerate(kinds) if k == "shoulder" and sides[j] == RIGHT]
+    if left and right:
+        estimates.append(np.linalg.norm(med[left[0]] - med[right[0]]) / SHOULDERS_PER_STATURE)
+    return float(max(size, np.median(estimates))) if estimates else float(size)

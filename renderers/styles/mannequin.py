@@ -35,7 +35,7 @@ import numpy as np
 
 from renderers.figure import LEFT, RIGHT, head_index, joint_sides, srgb_to_linear
 from renderers.styles import BodyStyle
-from renderers.styles.bones import bone_classes, descendants, joint_kinds
+from renderers.styles.bones import body_scale, bone_classes, descendants, joint_kinds
 
 # radius of a limb at a joint of this kind, and default radii of bone classes (fractions of the figure size)
 JOINT_RADIUS = {"shoulder": 0.030, "arm_mid": 0.027, "elbow": 0.023, "forearm_mid": 0.021, "wrist": 0.018,
@@ -120,7 +120,7 @@ class MannequinMesh:
         rest = np.asarray(rest_positions, float)
         med = np.nanmedian(rest, axis=0) if len(rest) else np.zeros((len(names), 3))
         med = np.nan_to_num(med)
-        self.size, self.up = float(size), np.asarray(up, float)
+        self.size, self.up = body_scale(names, par, rest, float(size)), np.asarray(up, float)
         self.floor_height: float | None = None
         kinds = joint_kinds(names, par)
         sides = joint_sides(names)
@@ -311,15 +311,22 @@ class MannequinStyle(BodyStyle):
     frame_pad = 0.05   # the body's thickness beyond its joints, as a fraction of the figure size (framing)
 
     def frame_points(self, positions: np.ndarray, names, parents, size: float) -> np.ndarray:
-        """Points ``(N, 3)`` the camera must also frame: the mitten tips (0.1 size beyond wrists without fingers)."""
+        """Points ``(N, 3)`` the camera must also frame: the mitten tips (0.1 scale beyond wrists without fingers)
+        and the head's extremes (its centre lies beyond the head joint), the scale being :func:`body_scale`'s."""
         if parents is None:
             return np.zeros((0, 3))
-        mittens = _mittens(joint_kinds(names, parents), np.asarray(parents, dtype=np.int64))
-        if not mittens:
-            return np.zeros((0, 3))
-        pos = np.asarray(positions, float)
-        w, p = pos[:, [m[0] for m in mittens]], pos[:, [m[1] for m in mittens]]
-        return (w + 0.1 * size * _unit(w - p, np.zeros(3))).reshape(-1, 3)
+        pos, par = np.asarray(positions, float), np.asarray(parents, dtype=np.int64)
+        s, pts = body_scale(names, par, pos, size), [np.zeros((0, 3))]
+        mittens = _mittens(joint_kinds(names, par), par)
+        if mittens:
+            w, p = pos[:, [m[0] for m in mittens]], pos[:, [m[1] for m in mittens]]
+            pts.append((w + 0.1 * s * _unit(w - p, np.zeros(3))).reshape(-1, 3))
+        head = head_index(names)
+        if head is not None and par[head] >= 0:
+            h = pos[:, head]
+            c = h + 0.55 * HEAD[1] * s * _unit(h - pos[:, par[head]], np.zeros(3))
+            pts.append((c[:, None] + np.concatenate([np.eye(3), -np.eye(3)]) * HEAD.max() * s).reshape(-1, 3))
+        return np.concatenate(pts)
 
     def mesh(self, motion: Any, settings: Any, size: float) -> MannequinMesh:
         from renderers.camera import UP_AXES
