@@ -1,9 +1,14 @@
-"""Typed option accessors of the plug-in contract: a bad --set value is a GeneratorError naming the field."""
+"""Typed option accessors of the plug-in contract (a bad --set value is a GeneratorError naming the field), and
+evalsuite.generators.options: each re-implementation's options declared once."""
 from __future__ import annotations
+
+import re
 
 import pytest
 
 from evalsuite.generators import GeneratorError, find_generator
+from evalsuite.generators.options import Option, Options
+from evalsuite.generators.presets import SYSTEM_OPTIONS, apply_preset, markdown_table, system_options
 from evalsuite.generators.registry import generator_class
 
 
@@ -67,3 +72,116 @@ def test_aud2_defaults_are_the_papers_velocity_target_and_the_japanese_autoencod
     with pytest.raises(GeneratorError, match="dae_inputs") as err:
         _configured(name, dae_inputs="velocities")._settings()
     assert err.value.field == "dae_inputs"
+
+
+# -- each system's options declared once (evalsuite.generators.options) ------------------------------------------
+# _settings() with no option and with the paper preset, as the plug-ins returned them before the declarations
+# were gathered (hard-coded from that code): the same values, of the same types
+_AUD2 = {"batch_size": 16, "code_dim": 40, "dae_epochs": 20, "dae_inputs": "poses+velocities", "ema": 0.99,
+         "epochs": 300, "features": "mfcc", "form": "sequence", "learning_rate": 0.001, "lr_schedule": "constant",
+         "past_frames": 1, "patience": 50, "representation": "expmap", "scale_floor": 0.1, "threads": 1,
+         "validate_on": "poses", "velocity_target": False, "width": 64}
+_AUD2_PAPER = {"batch_size": 2056, "ema": 0.0, "epochs": 120, "form": "windowed", "patience": 120,
+               "representation": "positions", "scale_floor": 0.0, "width": 256}
+SETTINGS_BEFORE = {
+    "gesticulator": (
+        {"autoregressive": True, "batch_size": 64, "dropout": 0.1, "ema": 0.0, "epochs": 90, "film": True,
+         "film_identity": False, "frame_layers": 1, "future": 20, "inputs": "audio+text", "learning_rate": 0.001,
+         "lr_schedule": "cosine", "past": 10, "patience": None, "prev_pose_dropout": 0.8, "scale_floor": 0.0,
+         "size": "cpu", "text_dropout": 0.8, "threads": 1, "velocity_weight": 7.0, "weight_decay": 0.001,
+         "words": "minilm-static"},
+        {"dropout": 0.2, "epochs": 95, "learning_rate": 0.0001, "lr_schedule": "constant", "size": "paper",
+         "text_dropout": 0.0, "velocity_weight": 0.6, "weight_decay": 0.0, "words": "minilm"}),
+    "aud2pose": ({**_AUD2, "velocity_target": True}, _AUD2_PAPER),
+    "aud2repr2pose": (_AUD2, _AUD2_PAPER),
+    "aud2motion": ({**_AUD2, "past_frames": 5},
+                   {"ema": 0.0, "epochs": 500, "past_frames": 1, "patience": 500, "representation": "positions",
+                    "scale_floor": 0.0, "width": 256}),
+    "gesture2vec": (
+        {"aligned": True, "batch_size": 128, "chunk": 30, "codebook": 300, "dae_epochs": 10, "decoding": "generative",
+         "learning_rate": 0.001, "reset_dead_codes": True, "scale_floor": 0.1, "size": "cpu", "stride": 10,
+         "temperature": 0.0, "threads": 1, "translation_epochs": 60, "vq_decoder_epochs": 10, "vq_epochs": 15,
+         "weakened_decoder": False, "words": "minilm-static"},
+        {"aligned": False, "dae_epochs": 20, "reset_dead_codes": False, "scale_floor": 0.0, "size": "paper",
+         "translation_epochs": 250, "vq_decoder_epochs": 20, "vq_epochs": 20, "weakened_decoder": True}),
+    "ferstl-mogan": (
+        {"ablation": "none", "adversarial_learning_rate": 0.0005, "adversarial_steps": 400, "batch_size": 16,
+         "classifier_epochs": 30, "discriminator_learning_rate": 0.0001, "discriminator_width": 64,
+         "learning_rate": 0.001, "noise_dim": 8, "phase_labels": "corpus", "phase_pretrain_tries": 40,
+         "pretrain_epochs": 30, "realism_pretrain_steps": 100, "scale_floor": 0.1, "threads": 1, "width": 128},
+        {"noise_dim": 0, "scale_floor": 0.0, "width": 256}),
+}
+
+
+def _same(got, expected):
+    assert got == expected
+    assert {k: type(v) for k, v in got.items()} == {k: type(v) for k, v in expected.items()}
+
+
+@pytest.mark.parametrize("name", list(SETTINGS_BEFORE))
+def test_settings_are_those_of_the_code_before_the_options_were_declared_once(name):
+    default, paper = SETTINGS_BEFORE[name]
+    _same(_configured(name)._settings(), default)
+    _same(_configured(name, **apply_preset(name, "paper", {}))._settings(), {**default, **paper})
+
+
+@pytest.mark.parametrize("name", list(SETTINGS_BEFORE))
+def test_spec_config_and_preset_rows_derive_from_the_declarations(name):
+    options = system_options(name)
+    cls = generator_class(find_generator(name).target)
+    assert cls.spec.config == options.config_help()
+    assert SYSTEM_OPTIONS[name] == options.preset_rows()
+    g = _configured(name)
+    settings = g._settings()
+    assert set(settings) == {o.name for o in options if o.settings}
+    for option in options:      # every row's cpu-small value is the plug-in's default
+        if option.settings:
+            assert settings[option.name] == option.default, option.name
+    assert [line.split(" | ")[0] for line in markdown_table(name).splitlines()[2:]] == \
+        [f"| `{row.name}`" for row in SYSTEM_OPTIONS[name]]
+
+
+def test_the_three_aud2_systems_share_one_help_and_differ_where_declared():
+    configs = [generator_class(find_generator(n).target).spec.config for n in ("aud2pose", "aud2motion", "aud2repr2pose")]
+    assert configs[0] == configs[1] == configs[2]
+    assert [o.name for o in SYSTEM_OPTIONS["aud2motion"]] == ["width", "past_frames", "epochs", "patience", "ema",
+                                                              "scale_floor", "representation"]
+    assert _configured("aud2pose", form="windowed")._settings()["batch_size"] == 2056  # the windowed form's batch
+    assert _configured("aud2pose", form="windowed", batch_size=8)._settings()["batch_size"] == 8
+
+
+@pytest.mark.parametrize(("option", "value", "expected"), [
+    ("decoding", "beam", "decoding must be generative or retrieval, got 'beam'"),
+    ("codebook", "0", "codebook must be a positive integer, got 0"),
+    ("threads", 0, "threads must be a positive integer, got 0"),
+    ("temperature", "-1", "temperature must be >= 0, got -1.0"),
+])
+def test_gesture2vec_ranges_are_checked_with_the_same_messages(option, value, expected):
+    with pytest.raises(GeneratorError, match=re.escape(expected)) as err:
+        _configured("gesture2vec", **{option: value})._settings()
+    assert err.value.field == option
+
+
+def test_an_option_parses_by_its_kind():
+    g = _configured("gesticulator", frame_layers="2", patience="7", zero_audio="yes")
+    opts = system_options("gesticulator")
+    assert opts["frame_layers"].parse(g) == 2 and opts["patience"].parse(g) == 7
+    assert opts.value(g, "zero_audio") is True and "zero_audio" not in g._settings()  # read at generation only
+    assert opts["patience"].parse(_configured("gesticulator")) is None
+    with pytest.raises(GeneratorError, match="frame_layers must be one of 1, 2, got '3'"):
+        opts["frame_layers"].parse(_configured("gesticulator", frame_layers=3))
+    assert opts["velocity_weight"].paper_value == 0.6 and opts["inputs"].paper_value == "audio+text"
+
+
+def test_declarations_refuse_mistakes():
+    with pytest.raises(ValueError, match="kind must be one of"):
+        Option("x", "integer", 1, "help")
+    with pytest.raises(ValueError, match="needs its choices"):
+        Option("x", "choice", "a", "help")
+    with pytest.raises(ValueError, match="declared twice"):
+        Options("s", (Option("x", "int", 1, "help"), Option("x", "int", 2, "help")))
+    with pytest.raises(ValueError, match="no option"):
+        system_options("gesticulator").revised("other", {"nonexistent": {"default": 1}})
+    revised = Options("s", (Option("x", "int", 1, "h", source="paper"), Option("y", "int", 2, "h"))).revised(
+        "t", {"y": {"default": 3}}, drop=("x",))
+    assert revised.defaults() == {"y": 3} and revised.preset_rows() == ()

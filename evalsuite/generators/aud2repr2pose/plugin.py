@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from evalsuite.corpus.types import Corpus
+from evalsuite.generators.aud2repr2pose.options import OPTIONS, WINDOWED_BATCH
 from evalsuite.generators.aud2repr2pose.systems import SYSTEMS
 from evalsuite.generators.contract import (
     GenerationRequest,
@@ -38,8 +39,7 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
-from evalsuite.generators.schedules import SCHEDULES
+from evalsuite.generators.scaling import FLOOR_DEVIATION
 from evalsuite.generators.weight_averaging import EMA_DEVIATION
 
 __all__ = ["Aud2Pose", "Aud2Motion", "Aud2Repr2Pose"]
@@ -48,33 +48,6 @@ CITATION = ("Kucherenko, Hasegawa, Kaneko, Henter, Kjellström (2021). Moving fa
             "representations and post-processing in speech-driven automatic gesture generation. IJHCI 37(14); "
             "and Kucherenko et al. (2019). Analyzing input and output representations for speech-driven gesture "
             "generation. IVA 2019.")
-OPTIONS = {"form": "sequence (default; a CPU deviation: one GRU pass per 100-frame chunk) or windowed (the paper's "
-                   "61-frame window per output frame)",
-           "representation": "expmap (default: joint rotations, BVH, as the GENEA 2020 BA baseline) or positions "
-                             "(hip-centred joint positions, as the IVA'19 paper)",
-           "features": "mfcc (default: 26 MFCC, mfcc_kucherenko) or mfcc+prosody (MFCC + pitch and energy)",
-           "width": "units of the dense and GRU layers (default 64; paper 256)",
-           "code_dim": "aud2repr2pose: size of the motion representation (default 40, as GENEA 2020 BA)",
-           "epochs": "most epochs of the speech network (default 300)", "dae_epochs": "autoencoder epochs (default 20)",
-           "lr_schedule": "constant (default, the paper's) or cosine (Adam's rate decays to 1 % by epoch 'epochs')",
-           "patience": "stop after this many epochs without a better validation loss (default 50); the best "
-                       "validation epoch's weights are kept",
-           "batch_size": "windows or chunks per batch (default 16 chunks / 2056 windows)",
-           "learning_rate": "Adam (default 1e-3, the paper's)",
-           "scale_floor": FLOOR_OPTION,
-           "threads": "torch threads (default 1)",
-           "ema": "decay of an exponential moving average of the weights per optimiser step (default 0.99; 0: "
-                  "off, the paper's); the average is what is validated and kept",
-           "velocity_target": "the pose's frame difference as a second training target, discarded at generation "
-                              "(default: on for aud2pose, off for aud2motion and aud2repr2pose, as the paper)",
-           "dae_inputs": "aud2repr2pose: poses+velocities (default: the autoencoder codes each pose with its frame "
-                         "difference, as the paper's Japanese-data setup) or poses (the paper's English-data setup)",
-           "validate_on": "poses (default: MSE of the normalised poses over whole validation segments, the "
-                          "representation decoded) or targets (the training loss on validation chunks: the "
-                          "representation for aud2repr2pose)",
-           "past_frames": "sequence form: each frame's speech features with those of the frames before it, this "
-                          "many in all (default 5 for aud2motion: the frame and the 0.25 s before it; 1 for aud2pose "
-                          "and aud2repr2pose: the frame alone, the paper's)"}
 DEVIATIONS = ("The speech network runs in the sequence-level form by default (one bidirectional GRU pass per "
               "100-frame chunk instead of one 61-frame window per output frame: ~60x less computation on a CPU); "
               "form=windowed is the paper's.",
@@ -93,37 +66,25 @@ class _Aud2(Generator):
     system: ClassVar[str]
 
     def _settings(self) -> dict[str, Any]:
-        form = self.choice_option("form", "sequence", ("sequence", "windowed"))
-        rep = self.choice_option("representation", "expmap", ("expmap", "positions"))
-        feats = self.choice_option("features", "mfcc", ("mfcc", "mfcc+prosody"))
-        schedule = self.choice_option("lr_schedule", "constant", SCHEDULES)
-        windowed = form == "windowed"
+        """The options (:data:`evalsuite.generators.aud2repr2pose.options.OPTIONS`), parsed and checked; the
+        windowed form's batches default to the paper's 2056 windows."""
+        options = OPTIONS[self.system]
+        windowed = options.value(self, "form") == "windowed"
         if windowed and self.system == "aud2motion":
             raise GeneratorError("aud2motion is sequence-level by definition (a causal GRU returning one pose per "
                                  "frame of a chunk); form=windowed would make it a centred-window model that sees "
                                  "the future", field="form")
-        return {"form": form, "representation": rep, "features": feats,
-                "width": self.int_option("width", 64), "code_dim": self.int_option("code_dim", 40),
-                "epochs": self.int_option("epochs", 300), "dae_epochs": self.int_option("dae_epochs", 20),
-                "patience": self.int_option("patience", 50),
-                "batch_size": self.int_option("batch_size", 2056 if windowed else 16),
-                "learning_rate": self.float_option("learning_rate", 1e-3), "threads": self.int_option("threads", 1),
-                "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR),
-                "lr_schedule": schedule, "ema": self.fraction_option("ema", 0.99),
-                "validate_on": self.choice_option("validate_on", "poses", ("poses", "targets")),
-                "velocity_target": self.bool_option("velocity_target", SYSTEMS[self.system][1]["velocity_target"]),
-                "dae_inputs": self.choice_option("dae_inputs", "poses+velocities", ("poses+velocities", "poses")),
-                "past_frames": self._past_frames(windowed)}
+        st = options.parse(self, {"batch_size": WINDOWED_BATCH} if windowed else None)
+        self._check_past_frames(st["past_frames"], windowed)
+        return st
 
-    def _past_frames(self, windowed: bool) -> int:
-        k = self.int_option("past_frames", SYSTEMS[self.system][1].get("past_frames", 1))
+    def _check_past_frames(self, k: int, windowed: bool) -> None:
         if k < 1:
             raise GeneratorError(f"{self.spec.name}: option past_frames must be at least 1, got {k}",
                                  field="past_frames")
         if windowed and k > 1:
             raise GeneratorError(f"{self.spec.name}: past_frames applies to the sequence form; the windowed form "
                                  "already reads 30 frames either side", field="past_frames")
-        return k
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -214,7 +175,7 @@ def _spec(name: str, summary: str) -> GeneratorSpec:
                          audio="required", native_fps=20.0, output="any", units="cm", trainable=True,
                          needs_model=True, extra="learned",
                          skeleton="the training corpus's skeleton (GENEA 2020 upper-body joints modelled)",
-                         config=OPTIONS, deviations=DEVIATIONS)
+                         config=OPTIONS[name].config_help(), deviations=DEVIATIONS)
 
 
 class Aud2Pose(_Aud2):

@@ -28,6 +28,7 @@ from evalsuite.generators.contract import (
     TrainingResult,
 )
 from evalsuite.generators.datastream import SegmentStore
+from evalsuite.generators.ferstl_mogan.options import ABLATIONS, OPTIONS
 from evalsuite.generators.joint_presets import ARM_JOINTS, WRIST_JOINTS
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
@@ -41,14 +42,11 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
+from evalsuite.generators.scaling import FLOOR_DEVIATION
 
 __all__ = ["FerstlMogan", "ABLATIONS"]
 
 AUDIO_RECIPE = "mfcc_f0_ferstl"
-DISCRIMINATORS = ("phase", "realism", "minibatch", "displacement")
-ABLATIONS = {"none": DISCRIMINATORS, "mse_only": ("mse_only",),
-             **{f"no_{d}": tuple(x for x in DISCRIMINATORS if x != d) for d in DISCRIMINATORS}}
 CORE_DEVIATIONS = (  # the core's (net.DEVIATIONS imports torch; a test checks they agree)
     "Seeded noise channels are appended to the generator's speech input so that one model gives k different "
     "samples per segment (the paper's generator reads speech only).",
@@ -81,47 +79,12 @@ class FerstlMogan(Generator):
         audio="required", transcript="none", word_timings="none", native_fps=20.0, output="positions",
         skeleton="the training corpus's skeleton (GENEA 2020 upper-body joints, hip-centred positions)",
         units="cm", stochastic=True, trainable=True, needs_model=True, extra="learned",
-        config={"ablation": "none (default), no_phase, no_realism, no_minibatch, no_displacement or mse_only "
-                            "(the paper's Figure 1)",
-                "phase_labels": "corpus (default: the corpus's per-frame labels when every training segment has "
-                                "them, else the heuristic labeller) or heuristic",
-                "width": "generator units (default 128; paper 256)",
-                "discriminator_width": "discriminator units (default 64)",
-                "noise_dim": "noise channels (default 8)",
-                "classifier_epochs": "phase classifier epochs (default 30)",
-                "pretrain_epochs": "MSE pre-training epochs (default 30)",
-                "adversarial_steps": "adversarial steps (default 400)",
-                "realism_pretrain_steps": "steps of the realism discriminator's pre-training (default 100)",
-                "phase_pretrain_tries": "batches per generator snapshot at most in the phase discriminator's "
-                                        "pre-training (default 40)",
-                "batch_size": "sequences of 100 frames per batch (default 16)",
-                "learning_rate": "Adam, classifier and pre-training (default 1e-3)",
-                "adversarial_learning_rate": "RMSprop: the generator's, and the discriminators' pre-training "
-                                             "(default 5e-4)",
-                "discriminator_learning_rate": "RMSprop of the discriminators in adversarial training (default "
-                                               "1e-4, a fifth of the generator's: at equal rates they won and "
-                                               "the motion shrank below the MSE-only model's)",
-                "threads": "torch threads (default 1)",
-                "scale_floor": FLOOR_OPTION},
+        config=OPTIONS.config_help(),
         deviations=CORE_DEVIATIONS + MY_DEVIATIONS + (FLOOR_DEVIATION,))
 
     def _settings(self) -> dict[str, Any]:
-        ablation = self.choice_option("ablation", "none", tuple(ABLATIONS))
-        labels = self.choice_option("phase_labels", "corpus", ("corpus", "heuristic"))
-        return {"ablation": ablation, "phase_labels": labels, "width": self.int_option("width", 128),
-                "discriminator_width": self.int_option("discriminator_width", 64),
-                "noise_dim": self.int_option("noise_dim", 8),
-                "classifier_epochs": self.int_option("classifier_epochs", 30),
-                "pretrain_epochs": self.int_option("pretrain_epochs", 30),
-                "adversarial_steps": self.int_option("adversarial_steps", 400),
-                "realism_pretrain_steps": self.int_option("realism_pretrain_steps", 100),
-                "phase_pretrain_tries": self.int_option("phase_pretrain_tries", 40),
-                "batch_size": self.int_option("batch_size", 16),
-                "learning_rate": self.float_option("learning_rate", 1e-3),
-                "adversarial_learning_rate": self.float_option("adversarial_learning_rate", 5e-4),
-                "discriminator_learning_rate": self.float_option("discriminator_learning_rate", 1e-4),
-                "threads": self.int_option("threads", 1),
-                "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR)}
+        """The options (:data:`evalsuite.generators.ferstl_mogan.options.OPTIONS`), parsed."""
+        return OPTIONS.parse(self)
 
     # -- training ------------------------------------------------------------------------------------------
     def _arrays(self, segs: Sequence[Segment], rep: PoseRepresentation, use_corpus_labels: bool,

@@ -25,6 +25,7 @@ from evalsuite.generators.contract import (
     TrainingResult,
 )
 from evalsuite.generators.datastream import stream_arrays
+from evalsuite.generators.gesticulator.options import OPTIONS, SIZES
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
@@ -37,14 +38,10 @@ from evalsuite.generators.reimpl import (
     torch_setup,
     write_json,
 )
-from evalsuite.generators.schedules import SCHEDULES
 
 __all__ = ["Gesticulator"]
 
 AUDIO_RECIPE = "logmel_gesticulator"
-# sizes: the paper's (124 / 612, 256 / FiLM 512) and a CPU preset
-SIZES: dict[str, dict[str, Any]] = {"paper": {"frame_dim": 124, "hidden": (612, 256), "film_dim": 512},
-         "cpu": {"frame_dim": 32, "hidden": (256, 128), "film_dim": 256}}
 
 
 class Gesticulator(Generator):
@@ -58,41 +55,7 @@ class Gesticulator(Generator):
         audio="required", transcript="required", word_timings="estimated", native_fps=20.0, output="bvh",
         skeleton="the training corpus's skeleton (GENEA 2020 upper-body joints modelled)", units="cm",
         trainable=True, needs_model=True, extra="learned, text",
-        config={"words": "word vectors (default 'minilm-static': all-MiniLM-L6-v2's context-free vectors); 'minilm' "
-                         "(contextual, as the paper's BERT), 'hash' (no model), 'bert:FOLDER', 'fasttext:FILE.vec'",
-                "inputs": "audio+text (default), audio or text (the paper's ablations)",
-                "autoregressive": "true (default); false: the paper's 'no autoregression' ablation",
-                "film": "true (default); false: concatenation instead of FiLM (ablation)",
-                "size": "cpu (default) or paper (124 / 612, 256 / 512 units)",
-                "epochs": "epochs of the compressed schedule (default 90)", "threads": "torch threads (default 1)",
-                "patience": "stop after this many epochs without a better validation loss (default none); the "
-                            "best validation epoch's weights are kept",
-                "batch_size": "sequences per batch (default 64)", "learning_rate": "Adam (default 1e-3; paper 1e-4)",
-                "lr_schedule": "cosine (default: decays to 1 % of learning_rate by the last epoch) or constant "
-                               "(the paper's)",
-                "past": "speech frames before the current one (default 10 = 0.5 s, the paper's)",
-                "future": "speech frames after the current one (default 20 = 1 s, the paper's)",
-                "dropout": "dropout of the speech layers (default 0.1; the paper's 0.2)",
-                "weight_decay": "Adam weight decay (default 1e-3; the paper: none)",
-                "prev_pose_dropout": "dropout of the previous poses before FiLM (default 0.8, the paper's)",
-                "velocity_weight": "alpha of the paper's loss, MSE(pose) + alpha MSE(velocity) (default 7; the "
-                                   "paper's 0.6; 0 is its 'no velocity penalty' ablation)",
-                "ema": "decay of an exponential moving average of the weights per step (default 0: off); the "
-                       "average is what is validated and kept",
-                "scale_floor": "a pose dimension's standard deviation is taken as at least this fraction of the "
-                               "widest dimension's (default 0, the paper's unit variance; 0.1 scales idle sway as "
-                               "the other re-implementations do, which on the synthetic speaker raised the held-out "
-                               "pose error from 0.52 to 0.62 x mean pose)",
-                "film_identity": "false (default: FiLM as the paper's equation, x * alpha + beta, with alpha and beta "
-                                 "from a two-layer pose encoder fed dropped-out poses); true: as the original code, "
-                                 "x * (1 + alpha) + beta from one zero-initialised layer with dropout after it "
-                                 "(identity at the start of training)",
-                "frame_layers": "layers of the per-frame speech encoder (default 1; 2: as the original code, input -> "
-                                "2 x frame encoding -> frame encoding)",
-                "text_dropout": "in training, each value of the text features (word vector and timing) is dropped "
-                                "at the input with this probability (default 0.8; not in the paper: 0)",
-                "zero_audio": "at generation: replace the audio features by their training mean (shows what the "
-                              "text path alone does)"},
+        config=OPTIONS.config_help(),
         deviations=(
             "Text: word vectors from all-MiniLM-L6-v2 (384-d, offline from the text extra) or another local model "
             "instead of BERT-base-cased (768-d) fetched from a hub; by default its context-free vectors (on a "
@@ -113,24 +76,8 @@ class Gesticulator(Generator):
 
     # -- training ------------------------------------------------------------------------------------------
     def _settings(self) -> dict[str, Any]:
-        inputs = self.choice_option("inputs", "audio+text", ("audio+text", "audio", "text"))
-        size = self.choice_option("size", "cpu", tuple(SIZES))
-        lr_schedule = self.choice_option("lr_schedule", "cosine", SCHEDULES)
-        return {"inputs": inputs, "size": size, "words": str(self.option("words", "minilm-static")),
-                "autoregressive": self.bool_option("autoregressive", True), "film": self.bool_option("film", True),
-                "epochs": self.int_option("epochs", 90), "threads": self.int_option("threads", 1),
-                "patience": None if self.option("patience") is None else self.int_option("patience"),
-                "batch_size": self.int_option("batch_size", 64),
-                "learning_rate": self.float_option("learning_rate", 1e-3),
-                "lr_schedule": lr_schedule,
-                "past": self.int_option("past", 10), "future": self.int_option("future", 20),
-                "dropout": self.float_option("dropout", 0.1), "weight_decay": self.float_option("weight_decay", 1e-3),
-                "prev_pose_dropout": self.float_option("prev_pose_dropout", 0.8),
-                "scale_floor": self.fraction_option("scale_floor", 0.0),
-                "velocity_weight": self.float_option("velocity_weight", 7.0), "ema": self.fraction_option("ema", 0.0),
-                "film_identity": self.bool_option("film_identity", False),
-                "frame_layers": int(self.choice_option("frame_layers", "1", ("1", "2"))),
-                "text_dropout": self.fraction_option("text_dropout", 0.8)}
+        """The training options (:data:`evalsuite.generators.gesticulator.options.OPTIONS`), parsed."""
+        return OPTIONS.parse(self)
 
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
@@ -192,7 +139,7 @@ class Gesticulator(Generator):
     def _speech(self, req: GenerationRequest) -> np.ndarray:
         speech = request_arrays(req, self.rep.fps, audio_recipe=self.saved["audio_recipe"], words=self.saved["words"],
                                 name=self.spec.name).speech
-        if self.bool_option("zero_audio", False):  # the training mean: zero after standardisation
+        if OPTIONS.value(self, "zero_audio"):  # the training mean: zero after standardisation
             a = int(self.saved["net"]["audio_dim"])
             speech[:, :a] = self.model.speech_norm.mean[:a]
         return speech

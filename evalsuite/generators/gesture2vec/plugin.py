@@ -33,6 +33,7 @@ from evalsuite.generators.contract import (
 )
 from evalsuite.generators.datastream import RELEASE_BYTES, SegmentStore, release
 from evalsuite.generators.gesture2vec.info import DEVIATIONS as CORE_DEVIATIONS
+from evalsuite.generators.gesture2vec.options import OPTIONS, SIZES
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
@@ -44,18 +45,10 @@ from evalsuite.generators.reimpl import (
     weights_sha256,
     write_json,
 )
-from evalsuite.generators.scaling import DEFAULT_FLOOR, FLOOR_DEVIATION, FLOOR_OPTION
+from evalsuite.generators.scaling import FLOOR_DEVIATION
 
 __all__ = ["Gesture2Vec", "code_usage", "SIZES"]
 
-# the paper's sizes (§4) and a CPU preset (fewer recurrent units and layers)
-SIZES: dict[str, dict[str, int]] = {
-    "paper": {"latent_dim": 40, "vq_hidden": 200, "vq_layers": 2, "text_hidden": 200},
-    "cpu": {"latent_dim": 40, "vq_hidden": 96, "vq_layers": 1, "text_hidden": 96},
-}
-WORDS_OPTION = ("word vectors: 'minilm-static' (default: all-MiniLM-L6-v2 static word vectors, offline from the "
-                "text extra), 'minilm' (contextual), 'hash' (no model, no meaning), 'bert:FOLDER', "
-                "'fasttext:FILE.vec' (the paper's FastText crawl-300d-2M vectors in .vec form)")
 MY_DEVIATIONS = (
     "Sizes: the cpu preset (default) has 96 recurrent units and one layer in the VQ-DVAE and the translation "
     "model (paper: 200 units, 2 layers); size=paper restores them. Stage epochs are compressed (defaults "
@@ -112,56 +105,13 @@ class Gesture2Vec(Generator):
         audio="none", transcript="required", word_timings="required", native_fps=20.0, output="bvh",
         skeleton="the training corpus's skeleton (GENEA 2020 upper-body joints as 3x3 rotation matrices)",
         units="cm", trainable=True, needs_model=True, extra="learned, text",
-        config={"words": WORDS_OPTION,
-                "decoding": "generative (default: codes -> VQ-DVAE decoder -> frame decoder, deterministic) or "
-                            "retrieval (the original repository's: a random training clip of each code, seeded; "
-                            "flagged in generation.json)",
-                "temperature": "sampling temperature of the translation decoder (default 0: greedy)",
-                "codebook": "K, codes in the codebook (default 300, the paper's)",
-                "chunk": "frames per VQ-DVAE chunk (default 30, the paper's)",
-                "stride": "frames between training chunks (default 10, the paper's)",
-                "size": "cpu (default: 96 units, 1 layer) or paper (200 units, 2 layers)",
-                "dae_epochs": "frame autoencoder epochs (default 10; paper 20)",
-                "vq_epochs": "VQ-DVAE epochs (default 15; paper 20)",
-                "vq_decoder_epochs": "VQ-DVAE decoder-only epochs (default 10; paper 20)",
-                "translation_epochs": "translation epochs (default 60; repository 250)",
-                "batch_size": "chunks / windows per batch (default 128, the repository's)",
-                "learning_rate": "Adam, all stages (default 1e-3, the paper's for the DAE)",
-                "reset_dead_codes": "true (default) or false: restart unused codes in VQ-DVAE training",
-                "aligned": "true (default): the translation decoder also reads the words of its chunk and the one "
-                           "before; false: attention alone (the paper's)",
-                "weakened_decoder": "false (default): the VQ-DVAE's first stage trains encoder, codebook and "
-                                    "decoder together; true: the decoder is frozen in that stage (the paper's "
-                                    "weakened decoder, §4.3), then trained alone in the second",
-                "threads": "torch threads (default 1)",
-                "scale_floor": FLOOR_OPTION},
+        config=OPTIONS.config_help(),
         deviations=CORE_DEVIATIONS + MY_DEVIATIONS + (FLOOR_DEVIATION,))
 
     # -- options -------------------------------------------------------------------------------------------
     def _settings(self) -> dict[str, Any]:
-        size = self.choice_option("size", "cpu", tuple(SIZES))
-        decoding = str(self.option("decoding", "generative"))
-        if decoding not in ("generative", "retrieval"):
-            raise GeneratorError(f"decoding must be generative or retrieval, got {decoding!r}", field="decoding")
-        st: dict[str, Any] = {"size": size, "decoding": decoding, "words": str(self.option("words", "minilm-static")),
-              "temperature": self.float_option("temperature", 0.0), "codebook": self.int_option("codebook", 300),
-              "chunk": self.int_option("chunk", 30), "stride": self.int_option("stride", 10),
-              "dae_epochs": self.int_option("dae_epochs", 10), "vq_epochs": self.int_option("vq_epochs", 15),
-              "vq_decoder_epochs": self.int_option("vq_decoder_epochs", 10),
-              "translation_epochs": self.int_option("translation_epochs", 60),
-              "batch_size": self.int_option("batch_size", 128),
-              "learning_rate": self.float_option("learning_rate", 1e-3),
-              "reset_dead_codes": self.bool_option("reset_dead_codes", True),
-              "aligned": self.bool_option("aligned", True),
-              "weakened_decoder": self.bool_option("weakened_decoder", False),
-              "threads": self.int_option("threads", 1),
-              "scale_floor": self.fraction_option("scale_floor", DEFAULT_FLOOR)}
-        for name in ("codebook", "chunk", "stride", "batch_size", "threads"):
-            if st[name] < 1:
-                raise GeneratorError(f"{name} must be a positive integer, got {st[name]}", field=name)
-        if st["temperature"] < 0:
-            raise GeneratorError(f"temperature must be >= 0, got {st['temperature']}", field="temperature")
-        return st
+        """The options (:data:`evalsuite.generators.gesture2vec.options.OPTIONS`), parsed and checked."""
+        return OPTIONS.parse(self)
 
     @property
     def stochastic(self) -> bool:
@@ -238,10 +188,8 @@ class Gesture2Vec(Generator):
                                 np.load(model_dir / "code_counts.npy"), [], pool)
         self.embedder = get_embedder(saved["words"])
         # generation options may differ from training's; the model's own settings are the defaults
-        self.decoding = str(self.option("decoding", "generative"))
-        if self.decoding not in ("generative", "retrieval"):
-            raise GeneratorError(f"decoding must be generative or retrieval, got {self.decoding!r}", field="decoding")
-        self.temperature = self.float_option("temperature", 0.0)
+        self.decoding = OPTIONS.value(self, "decoding")
+        self.temperature = OPTIONS.value(self, "temperature")
 
     def generate(self, request: GenerationRequest) -> GenerationResult:
         from evalsuite.generators.gesture2vec.training import generate_gesture2vec
