@@ -9,7 +9,6 @@ post-processing (moving average, 1-euro) applies to the output with ``evalsuite 
 from __future__ import annotations
 
 import pathlib
-import tempfile
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
@@ -26,7 +25,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
-from evalsuite.generators.datastream import stream_arrays
+from evalsuite.generators.datastream import stream_arrays, training_folder
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
     budget_seconds,
@@ -96,7 +95,7 @@ class _Aud2(Generator):
         rep = PoseRepresentation.from_motion(train[0].load_motion(), st["representation"])
         recipe = "mfcc_kucherenko"
         prosody = st["features"] == "mfcc+prosody"
-        data = tempfile.TemporaryDirectory(prefix=f"{self.system}-data-")  # features memory-mapped, not in memory
+        data = training_folder(self.system)  # features memory-mapped, not in memory
         speech, poses, _ = stream_arrays(train, rep, pathlib.Path(data.name), audio_recipe=recipe, words=None,
                                          speech=(lambda a, seg: self._prosody(a.speech, seg.audio, rep.fps))
                                          if prosody else None)

@@ -12,7 +12,6 @@ paper's Figure 1: ``ablation=no_phase|no_realism|no_minibatch|no_displacement|ms
 from __future__ import annotations
 
 import pathlib
-import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -27,7 +26,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
-from evalsuite.generators.datastream import SegmentStore
+from evalsuite.generators.datastream import SegmentStore, training_folder
 from evalsuite.generators.ferstl_mogan.options import ABLATIONS, OPTIONS
 from evalsuite.generators.joint_presets import ARM_JOINTS, WRIST_JOINTS
 from evalsuite.generators.pose_repr import PoseRepresentation
@@ -126,7 +125,7 @@ class FerstlMogan(Generator):
         if not any(j in rep.joints for j in WRIST_JOINTS):
             raise GeneratorError(f"ferstl-mogan needs a wrist ({'/'.join(WRIST_JOINTS)}) among the modelled joints")
         source = "corpus" if st["phase_labels"] == "corpus" and all(s.labels for s in (*train, *val)) else "heuristic"
-        data = tempfile.TemporaryDirectory(prefix="ferstl-mogan-data-")  # features memory-mapped, not in memory
+        data = training_folder("ferstl-mogan")  # features memory-mapped, not in memory
         speech, poses, phases = self._arrays(train, rep, source == "corpus", pathlib.Path(data.name))
         held = val if val else train
         vspeech, vposes, vphases = self._arrays(held, rep, source == "corpus")

@@ -10,7 +10,6 @@ paper's Table 2: ``inputs=audio`` / ``inputs=text``, ``autoregressive=false``, `
 from __future__ import annotations
 
 import pathlib
-import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -24,7 +23,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
-from evalsuite.generators.datastream import stream_arrays
+from evalsuite.generators.datastream import stream_arrays, training_folder
 from evalsuite.generators.gesticulator.options import OPTIONS, SIZES
 from evalsuite.generators.pose_repr import PoseRepresentation
 from evalsuite.generators.reimpl import (
@@ -90,7 +89,7 @@ class Gesticulator(Generator):
 
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), "expmap")
-        data = tempfile.TemporaryDirectory(prefix="gesticulator-data-")  # features memory-mapped, not in memory
+        data = training_folder("gesticulator")  # features memory-mapped, not in memory
         tr_speech, tr_poses, first = stream_arrays(train, rep, pathlib.Path(data.name), audio_recipe=AUDIO_RECIPE,
                                                    words=st["words"])
         va = corpus_arrays(val, rep, audio_recipe=AUDIO_RECIPE, words=st["words"]) if val else []

@@ -1,19 +1,23 @@
 """Gesture2Vec's training data: the VQ-DVAE's latent chunks, the translation model's word windows and their
-codes. Word tracks and word windows of the training split can live in memory-mapped stores
-(:mod:`evalsuite.generators.datastream`), so that memory does not grow with hours of corpus."""
+codes, and the retrieval pool. Word tracks and word windows of the training split can live in memory-mapped stores
+(:mod:`evalsuite.generators.datastream`), the pool's clips are read from the poses' map (:class:`Clips`) and
+written, then read back, as an uncompressed ``.npz`` memory-mapped member by member (:func:`save_pool`,
+:func:`open_pool`), so that memory does not grow with hours of corpus."""
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Sequence
+import struct
+import zipfile
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 import torch
 
-from evalsuite.generators.datastream import Mapped, SegmentStore, Windows
+from evalsuite.generators.datastream import RELEASE_BYTES, Mapped, SegmentStore, Windows, release
 from evalsuite.generators.gesture2vec.net import VQDVAE, G2VConfig
 
-__all__ = ["WordTrack", "word_rows", "word_tracks"]
+__all__ = ["WordTrack", "word_rows", "word_tracks", "Clips", "save_pool", "open_pool"]
 
 WordTrack = Sequence[tuple[np.ndarray, float]]   # (embedding, start time in seconds) per word
 
@@ -68,11 +72,38 @@ def _pad_words(items: list[np.ndarray], text_dim: int) -> tuple[torch.Tensor, to
     return torch.from_numpy(x), torch.from_numpy(mask)
 
 
+class Clips(Sequence[np.ndarray]):
+    """The clips ``(length, D)`` of a store's rows starting at rows ``starts`` (N,), each read from its file when
+    it is used (:meth:`SegmentStore.gather`): one code's retrieval pool without a Python object per clip."""
+
+    def __init__(self, store: SegmentStore, starts: np.ndarray, length: int):
+        self.store, self.starts, self.length = store, np.asarray(starts, np.int64), length
+
+    def __len__(self) -> int:
+        return len(self.starts)
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        s = int(self.starts[i])
+        return self.store.gather(np.arange(s, s + self.length))
+
+
+def _pool(store: SegmentStore, starts: np.ndarray, codes: np.ndarray, length: int) -> dict[int, Clips]:
+    """Clips grouped by code: codes in the order of their first clip, each code's clips in their order."""
+    order = np.argsort(codes, kind="stable")
+    keys, first = np.unique(codes, return_index=True)
+    bounds = np.searchsorted(codes[order], keys, side="left").tolist() + [len(codes)]
+    groups = {int(k): Clips(store, starts[order[bounds[j]:bounds[j + 1]]], length) for j, k in enumerate(keys)}
+    return {int(keys[j]): groups[int(keys[j])] for j in np.argsort(first, kind="stable")}
+
+
 def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequence[WordTrack], c: G2VConfig,
-                       fps: float, norm: Sequence[np.ndarray] | None = None,
-                       pool: dict[int, list[np.ndarray]] | None = None, folder: pathlib.Path | None = None
-                       ) -> tuple[Any, list[np.ndarray], Any]:
-    """Word windows and the codes of their non-overlapping chunks (and, with ``pool``, each code's clips). The
+                       fps: float, norm: SegmentStore | None = None,
+                       pool: dict[int, Sequence[np.ndarray]] | None = None, folder: pathlib.Path | None = None
+                       ) -> tuple[Any, np.ndarray, Any]:
+    """Word windows and the codes ``(n_windows, chunks_per_window)`` of their non-overlapping chunks (and, with
+    ``pool`` and the normalised poses' store ``norm``, each code's clips as :class:`Clips` of ``norm``). The
     windows' word rows ``(n_words, E + 1)`` and aligned words ``(chunks_per_window, 2 (E + 1))``: lists, or with
     ``folder`` a store (one segment per window) and :class:`Windows` of a store (memory-mapped).
 
@@ -82,23 +113,78 @@ def _translation_pairs(vq: VQDVAE, latents: Sequence[np.ndarray], words: Sequenc
     natural's (the translator over-fits the paper's K = 300 classes from non-overlapping windows alone)."""
     win = c.chunk * c.chunks_per_window
     srcs: Any = [] if folder is None else SegmentStore(folder / "word_windows.npy", dtype=np.float32)
-    tgts: list[np.ndarray] = []
+    tgts: list[np.ndarray] = []      # per segment: (its windows, chunks_per_window)
     aligned: Any = [] if folder is None else SegmentStore(folder / "aligned_words.npy", dtype=np.float32)
-    pooled: set[tuple[int, int]] = set()  # (segment, first frame): overlapping windows share chunks
+    starts: list[np.ndarray] = []    # per segment: the pooled chunks' first rows in norm, and their codes
+    codes_of: list[np.ndarray] = []
     with torch.no_grad():
         for i, (lat, track) in enumerate(zip(latents, words)):
+            seg_codes, pooled = [], np.zeros(len(lat), bool)  # overlapping windows share chunks: pool each once
             for s in range(0, len(lat) - win + 1, c.stride):
                 feats = _latent_chunks(lat[s:s + win], c.chunk, c.chunk)
                 codes = vq.quantise(vq.encode(torch.from_numpy(feats.astype(np.float32)))).numpy()
                 srcs.append(_window_words(track, s / fps, win / fps, c.text_dim))
                 aligned.append(_aligned(track, s / fps, c.chunk / fps, c.chunks_per_window, c.text_dim))
-                tgts.append(codes)
+                seg_codes.append(codes)
                 if pool is not None and norm is not None:
-                    for k, code in enumerate(codes):
-                        if (i, s + k * c.chunk) not in pooled:
-                            pooled.add((i, s + k * c.chunk))
-                            pool.setdefault(int(code), []).append(norm[i][s + k * c.chunk:s + (k + 1) * c.chunk])
+                    firsts = s + c.chunk * np.arange(len(codes))
+                    new = ~pooled[firsts]
+                    pooled[firsts] = True
+                    starts.append(int(norm.offsets[i]) + firsts[new])
+                    codes_of.append(codes[new])
+            if seg_codes:
+                tgts.append(np.stack(seg_codes))
+    if pool is not None and norm is not None and starts:
+        pool.update(_pool(norm, np.concatenate(starts), np.concatenate(codes_of), c.chunk))
     if folder is not None:
         srcs = srcs.finish() if len(tgts) else []
         aligned = Windows(aligned.finish(), c.chunks_per_window, c.chunks_per_window) if len(tgts) else []
-    return srcs, tgts, aligned
+    targets = np.concatenate(tgts) if tgts else np.zeros((0, c.chunks_per_window), np.int64)
+    return srcs, targets, aligned
+
+
+def save_pool(path: pathlib.Path, pool: Mapping[int, Sequence[np.ndarray]]) -> None:
+    """What ``np.savez(path, code_K=np.stack(clips of code K), ...)`` saves, one clip in memory at a time: each
+    entry's ``.npy`` header, then its clips' bytes (clips that are views of a memory-mapped file have its pages
+    dropped after every :data:`~evalsuite.generators.datastream.RELEASE_BYTES` written)."""
+    written = 0
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for k, clips in pool.items():
+            first = clips[0]
+            header = {"descr": np.lib.format.dtype_to_descr(first.dtype), "fortran_order": False,
+                      "shape": (len(clips), *first.shape)}
+            with zf.open(f"code_{k}.npy", "w", force_zip64=True) as fh:
+                np.lib.format.write_array_header_1_0(fh, header)
+                for clip in clips:
+                    fh.write(np.ascontiguousarray(clip, first.dtype).tobytes())
+                    written += clip.nbytes
+                    if written >= RELEASE_BYTES:
+                        release(clip)
+                        written = 0
+    if written and len(pool):
+        release(next(iter(pool.values()))[0])
+
+
+def open_pool(path: pathlib.Path) -> dict[int, np.ndarray]:
+    """A pool written by :func:`save_pool` (or ``np.savez``) as ``{K: (n_K, chunk, D)}`` arrays memory-mapped
+    from the ``.npz`` (its members are stored uncompressed: each is a ``.npy`` at an offset of the file); a
+    compressed member is read into memory."""
+    pool: dict[int, np.ndarray] = {}
+    with open(path, "rb") as fh, zipfile.ZipFile(fh) as zf:
+        for info in zf.infolist():
+            key = int(info.filename.split("_")[1].split(".")[0])
+            if info.compress_type != zipfile.ZIP_STORED:
+                with zf.open(info) as member:
+                    pool[key] = np.lib.format.read_array(member)
+                continue
+            fh.seek(info.header_offset)
+            local = fh.read(30)      # the local file header: its name and extra field lengths at bytes 26-29
+            fh.seek(info.header_offset + 30 + sum(struct.unpack("<HH", local[26:30])))
+            version = np.lib.format.read_magic(fh)
+            read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            shape, fortran, dtype = read(fh)
+            if not np.prod(shape):
+                pool[key] = np.zeros(shape, dtype)
+                continue
+            pool[key] = np.memmap(path, dtype, "r", fh.tell(), shape, "F" if fortran else "C")
+    return pool

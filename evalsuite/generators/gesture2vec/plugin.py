@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import json
 import pathlib
-import tempfile
-import zipfile
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -31,7 +29,7 @@ from evalsuite.generators.contract import (
     GeneratorSpec,
     TrainingResult,
 )
-from evalsuite.generators.datastream import RELEASE_BYTES, SegmentStore, release
+from evalsuite.generators.datastream import SegmentStore, training_folder
 from evalsuite.generators.gesture2vec.info import DEVIATIONS as CORE_DEVIATIONS
 from evalsuite.generators.gesture2vec.options import OPTIONS, SIZES
 from evalsuite.generators.pose_repr import PoseRepresentation
@@ -71,27 +69,6 @@ def _word_track(transcript: Transcript | None, embedder: Any) -> list[tuple[np.n
     return [(np.asarray(v, np.float32), float(w.start)) for v, w in zip(vectors, words)]
 
 
-def _save_pool(path: pathlib.Path, pool: dict[int, list[np.ndarray]]) -> None:
-    """What ``np.savez(path, code_K=np.stack(clips of code K), ...)`` saves, one clip in memory at a time: each
-    entry's ``.npy`` header, then its clips' bytes (the clips are views of a memory-mapped file, whose pages are
-    dropped every 64 MB written; one code may hold most of the pool)."""
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
-        for k, clips in pool.items():
-            first = np.asarray(clips[0])
-            header = {"descr": np.lib.format.dtype_to_descr(first.dtype), "fortran_order": False,
-                      "shape": (len(clips), *first.shape)}
-            with zf.open(f"code_{k}.npy", "w", force_zip64=True) as fh:
-                np.lib.format.write_array_header_1_0(fh, header)
-                written = 0
-                for clip in clips:
-                    fh.write(np.ascontiguousarray(clip, first.dtype).tobytes())
-                    written += clip.nbytes
-                    if written >= RELEASE_BYTES:
-                        release(clip)
-                        written = 0
-            release(first)
-
-
 class Gesture2Vec(Generator):
     spec = GeneratorSpec(
         name="gesture2vec", version="1", kind="re-implementation",
@@ -122,7 +99,7 @@ class Gesture2Vec(Generator):
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
             progress: Callable[[dict[str, Any]], None] | None = None) -> TrainingResult:
         from evalsuite.features.embeddings import get_embedder
-        from evalsuite.generators.gesture2vec.data import word_rows, word_tracks
+        from evalsuite.generators.gesture2vec.data import save_pool, word_rows, word_tracks
         from evalsuite.generators.gesture2vec.net import G2VConfig
         from evalsuite.generators.gesture2vec.training import G2VStages, code_perplexity, train_gesture2vec
 
@@ -131,7 +108,7 @@ class Gesture2Vec(Generator):
         train, val = splits_for_training(corpus)
         rep = PoseRepresentation.from_motion(train[0].load_motion(), "rotmat")
         embedder = get_embedder(st["words"])
-        data = tempfile.TemporaryDirectory(prefix="gesture2vec-data-")  # the training split memory-mapped
+        data = training_folder("gesture2vec")  # the training split memory-mapped
         folder = pathlib.Path(data.name)
         poses = SegmentStore(folder / "corpus_poses.npy", (rep.encode(s.load_motion()) for s in train))
         words = word_tracks(SegmentStore(folder / "word_tracks.npy", (
@@ -153,7 +130,7 @@ class Gesture2Vec(Generator):
                 for name, net in (("dae", model.dae), ("vqdvae", model.vq), ("translator", model.translator))}
         np.savez(out_dir / "normalisers.npz", pose_mean=model.pose_mean, pose_scale=model.pose_scale)
         np.save(out_dir / "code_counts.npy", model.code_counts)
-        _save_pool(out_dir / "retrieval_pool.npz", model.train_chunks)
+        save_pool(out_dir / "retrieval_pool.npz", model.train_chunks)
         model.data.cleanup()
         data.cleanup()
         write_json(out_dir / "settings.json", {**st, "net": config.to_dict(), "fps": rep.fps,
@@ -171,6 +148,7 @@ class Gesture2Vec(Generator):
     def load(self, config: Mapping[str, Any], model_dir: pathlib.Path | None = None) -> None:
         super().load(config, model_dir)
         from evalsuite.features.embeddings import get_embedder
+        from evalsuite.generators.gesture2vec.data import open_pool
         from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
         from evalsuite.generators.gesture2vec.training import TrainedG2V
 
@@ -182,7 +160,7 @@ class Gesture2Vec(Generator):
         for name, net in nets.items():
             load_state(model_dir, f"{name}.pt", net)
         norms = np.load(model_dir / "normalisers.npz")
-        pool = {int(k.split("_")[1]): list(v) for k, v in np.load(model_dir / "retrieval_pool.npz").items()}
+        pool = open_pool(model_dir / "retrieval_pool.npz")  # memory-mapped: clips are read when retrieved
         self.model = TrainedG2V(c, float(saved["fps"]), nets["dae"], nets["vqdvae"],  # type: ignore[arg-type]
                                 nets["translator"], norms["pose_mean"], norms["pose_scale"],  # type: ignore[arg-type]
                                 np.load(model_dir / "code_counts.npy"), [], pool)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import pathlib
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,7 +24,7 @@ import torch
 from torch import nn
 
 from evalsuite.generators import checkpoints
-from evalsuite.generators.datastream import Rows, SegmentStore, Windows, max_abs_deviation, mean_std
+from evalsuite.generators.datastream import Rows, SegmentStore, Windows, max_abs_deviation, mean_std, training_folder
 from evalsuite.generators.gesture2vec.data import (
     WordTrack,
     _aligned,
@@ -66,7 +66,7 @@ class TrainedG2V:
     pose_scale: np.ndarray
     code_counts: np.ndarray
     history: list[dict] = field(default_factory=list)
-    train_chunks: dict[int, list[np.ndarray]] = field(default_factory=dict)  # for retrieval decoding
+    train_chunks: Mapping[int, Any] = field(default_factory=dict)  # per code: its clips (n, chunk, D), retrieval
     stopped: list[str] = field(default_factory=list)                         # stages cut by the budget
     data: Any = None                                                         # the training maps' folder
 
@@ -90,9 +90,11 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
                       budget_seconds: float | None = None, on_epoch: Callable[[dict], None] | None = None,
                       data_dir: pathlib.Path | None = None) -> TrainedG2V:
     """The three stages on segments (lists or stores). The training split's normalised poses, latents, chunks and
-    word windows are memory-mapped in a temporary folder in ``data_dir`` (default: the system's), removed when
-    the model is no longer used (the retrieval pool's clips are views of the poses' map)."""
-    data = tempfile.TemporaryDirectory(prefix="gesture2vec-data-", dir=data_dir)
+    word windows are memory-mapped in a temporary folder in ``data_dir`` (default: a
+    :func:`~evalsuite.generators.datastream.training_folder`), removed when the model is no longer used (the
+    retrieval pool's clips are views of the poses' map)."""
+    data = (tempfile.TemporaryDirectory(prefix="gesture2vec-data-", dir=data_dir) if data_dir is not None
+            else training_folder("gesture2vec"))
     folder = pathlib.Path(data.name)
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
@@ -218,15 +220,15 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
         ck.step("vq-dvae", epoch, state, done=epoch >= total_vq)
     vq.eval()
     # 3. translation: word windows (one every `stride` frames) -> codes of each window's non-overlapping chunks
-    train_chunks: dict[int, list[np.ndarray]] = {}
+    train_chunks: dict[int, Sequence[np.ndarray]] = {}
     srcs, tgts, al = _translation_pairs(vq, latents, words, config, fps, norm, train_chunks, folder)
     vsrcs, vtgts, val_al = _translation_pairs(vq, vlatents, val_words, config, fps)
     if not len(srcs):
         raise ValueError(f"no segment has {config.chunk * config.chunks_per_window} frames for a translation window")
-    code_counts = np.bincount(np.concatenate(tgts), minlength=config.codebook)
+    code_counts = np.bincount(tgts.reshape(-1), minlength=config.codebook)
     translator = Translator(config)
     opt = torch.optim.Adam(translator.parameters(), lr=stages.translation_learning_rate)
-    targets = torch.from_numpy(np.stack(tgts).astype(np.int64))
+    targets = torch.from_numpy(tgts.astype(np.int64))
     ce = nn.functional.cross_entropy
     state = {"translator": translator, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
     first, done = ck.start("translation", state)
@@ -246,7 +248,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             translator.eval()
             with torch.no_grad():
                 wx, mask = _pad_words(vsrcs, config.text_dim)
-                vt = torch.from_numpy(np.stack(vtgts).astype(np.int64))
+                vt = torch.from_numpy(vtgts.astype(np.int64))
                 logits = translator(wx, mask, vt, torch.from_numpy(np.stack(val_al)))
                 rec["val_loss"] = ce(logits.reshape(-1, config.codebook), vt.reshape(-1)).item()
                 rec["val_code_error"] = float((logits.argmax(-1) != vt).float().mean())
@@ -296,7 +298,8 @@ def generate_gesture2vec(model: TrainedG2V, words: WordTrack, n_frames: int, *, 
         pieces = []
         for code in codes.tolist():
             pool = model.train_chunks.get(int(code))
-            pieces.append(pool[int(rng.integers(len(pool)))] if pool else np.zeros((c.chunk, c.pose_dim), np.float32))
+            pieces.append(pool[int(rng.integers(len(pool)))] if pool is not None and len(pool)
+                          else np.zeros((c.chunk, c.pose_dim), np.float32))
         norm = np.concatenate(pieces)
     else:
         latent = model.vq.decode(model.vq.codebook(codes))[..., :c.latent_dim]
