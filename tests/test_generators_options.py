@@ -185,3 +185,33 @@ def test_declarations_refuse_mistakes():
     revised = Options("s", (Option("x", "int", 1, "h", source="paper"), Option("y", "int", 2, "h"))).revised(
         "t", {"y": {"default": 3}}, drop=("x",))
     assert revised.defaults() == {"y": 3} and revised.preset_rows() == ()
+
+
+def _stated_defaults(text):
+    """The values a help text gives as the default: "(default 90)", "(default: 0.1", "cpu (default)"."""
+    return (re.findall(r"\(default[:;]? ?'?([^\s;,):']+)", text)
+            + re.findall(r"'?([\w+.-]+)'? \(default", text))
+
+
+def _states(token, value):
+    if isinstance(value, bool) or value is None:
+        return token.lower() == str(value).lower()
+    if isinstance(value, (int, float)):
+        try:
+            return float(token) == float(value)
+        except ValueError:
+            return False
+    return token == value
+
+
+# the aud2 systems share these two help texts, which give each system's default in prose ("5 for aud2motion")
+PER_SYSTEM_PROSE = {"past_frames", "velocity_target"}
+
+
+@pytest.mark.parametrize("name", list(SETTINGS_BEFORE))
+def test_the_help_states_the_declared_default(name):
+    """A help text that names a default names the declared one (a changed default cannot leave stale help)."""
+    for option in system_options(name):
+        if "default" in option.help and option.name not in PER_SYSTEM_PROSE:
+            stated = _stated_defaults(option.help)
+            assert any(_states(t, option.default) for t in stated), (option.name, option.default, stated)
