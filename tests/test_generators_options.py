@@ -215,3 +215,8 @@ def test_the_help_states_the_declared_default(name):
         if "default" in option.help and option.name not in PER_SYSTEM_PROSE:
             stated = _stated_defaults(option.help)
             assert any(_states(t, option.default) for t in stated), (option.name, option.default, stated)
+
+
+def test_gesture2vec_is_stochastic_only_with_retrieval_or_a_temperature():
+    assert [_configured("gesture2vec", **c).stochastic for c in ({}, {"decoding": "retrieval"},
+                                                                 {"temperature": "0.5"})] == [False, True, True]

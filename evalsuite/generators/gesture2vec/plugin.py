@@ -92,8 +92,10 @@ class Gesture2Vec(Generator):
 
     @property
     def stochastic(self) -> bool:
+        """Retrieval decoding, or sampling at a positive temperature, as configured (unparsed: never raises)."""
         st = self.config
-        return str(st.get("decoding", "generative")) == "retrieval" or float(st.get("temperature", 0.0)) > 0
+        return (str(st.get("decoding", OPTIONS["decoding"].default)) == "retrieval"
+                or float(st.get("temperature", OPTIONS["temperature"].default)) > 0)
 
     # -- training ------------------------------------------------------------------------------------------
     def fit(self, corpus: Corpus, out_dir: pathlib.Path, *, seed: int, budget_minutes: float | None = None,
