@@ -119,7 +119,11 @@ class SegmentStore(Sequence[np.ndarray]):
             self.release()
 
     def __iter__(self) -> Iterator[np.ndarray]:
-        return (self[i] for i in range(len(self)))
+        """The segments in order; at the end of a whole pass the pages it read are dropped (a store left after a
+        pass, e.g. the corpus's poses once normalised, keeps none resident)."""
+        for i in range(len(self)):
+            yield self[i]
+        self.release()
 
     def gather(self, rows: np.ndarray) -> np.ndarray:
         """``data[rows]`` (an integer array of row numbers, any shape) as an array in memory, read from the file
