@@ -186,3 +186,56 @@ def test_the_four_learning_criteria_hold_with_the_defaults_on_a_15_minute_corpus
     assert res.meta["code_perplexity"] > 0.3 * 300
     assert nsd["nsd"] < nsd["nsd_shuffled"], nsd
     assert fgd["gen"] < fgd["mean_pose"], fgd
+
+
+def test_the_conditioned_decoder_is_fed_its_last_frame_from_the_frame_before_the_chunk():
+    """conditioned_decoder (the paper's §4.3, the original code's autoencoder_conditioned): a one-direction GRU that
+    reads the code and the frame it produced last; in training it starts from the frame before the chunk (the
+    chunk's first latent minus its difference), at generation from the last frame of the chunk before."""
+    import torch
+
+    from evalsuite.generators.gesture2vec.net import VQDVAE, G2VConfig
+
+    torch.manual_seed(0)
+    c = G2VConfig(pose_dim=12, text_dim=8, latent_dim=4, chunk=6, codebook=5, vq_hidden=8, vq_layers=1,
+                  conditioned_decoder=True)
+    vq = VQDVAE(c)
+    assert not vq.decoder.bidirectional and vq.decoder.input_size == vq.code_dim + 8
+    assert VQDVAE(G2VConfig(pose_dim=12, text_dim=8, latent_dim=4)).decoder.bidirectional, "the default as before"
+    e = torch.randn(3, vq.code_dim)
+    with torch.no_grad():
+        a, b = vq.decode(e[:1]), vq.decode(e[:1], torch.ones(1, 8))
+        assert not torch.allclose(a[:, 0], b[:, 0]), "the first step reads the frame before the chunk"
+        seq = vq.decode_sequence(e, torch.full((8,), 0.5))
+        first = vq.decode(e[:1], torch.full((1, 8), 0.5))
+        np.testing.assert_allclose(seq[0], first[0], atol=1e-6)
+        np.testing.assert_allclose(seq[1], vq.decode(e[1:2], first[:, -1])[0], atol=1e-6)   # carried across chunks
+    latent = torch.randn(1, 10, 4).cumsum(1)                     # a latent track and its frame differences
+    feats = torch.cat([latent, torch.diff(latent, dim=1, prepend=latent[:, :1])], dim=-1)
+    seen = []
+    original = vq.decode
+    vq.decode = lambda code, previous=None: seen.append(previous) or original(code, previous)
+    recon, _, loss = vq(feats[:, 3:9])                             # a chunk that starts at frame 3
+    np.testing.assert_allclose(seen[0][0, :4].detach(), latent[0, 2], atol=1e-6)
+    total = ((recon - feats[:, 3:9]) ** 2).mean() + loss
+    total.backward()
+    assert total.item() > 0 and all(p.grad is not None for p in vq.decoder.parameters())
+
+
+def test_a_conditioned_decoder_trains_and_generates_from_the_cli_options(tmp_path):
+    from evalsuite.generators.checking import tiny_corpus
+    from evalsuite.generators.requests import requests_from_corpus
+    from evalsuite.generators.runner import generate
+    from evalsuite.generators.training import train
+
+    corpus = tiny_corpus(tmp_path / "tiny", n_segments=6, seconds=8.0)
+    entry = find_generator("gesture2vec")
+    cfg = {"words": "hash", "codebook": 8, "dae_epochs": 2, "vq_epochs": 2, "vq_decoder_epochs": 2,
+           "translation_epochs": 2, "conditioned_decoder": "true"}
+    train(entry, corpus, tmp_path / "m", seed=0, config=cfg, progress=False)
+    saved = json.loads((tmp_path / "m" / "model.json").read_text())
+    assert saved["config"]["conditioned_decoder"] in (True, "true")
+    reqs = requests_from_corpus(corpus, "test", 20.0)
+    generate(entry, reqs, tmp_path / "gen", model_dir=tmp_path / "m", seed=0, progress=False)
+    record = json.loads((tmp_path / "gen" / "generation.json").read_text())
+    assert record["files"] and all(f["meta"]["codes"] for f in record["files"])   # loaded with its decoder

@@ -101,9 +101,10 @@ SETTINGS_BEFORE = {
         {"aligned": True, "batch_size": 128, "chunk": 30, "codebook": 300, "dae_epochs": 10, "decoding": "generative",
          "learning_rate": 0.001, "reset_dead_codes": True, "scale_floor": 0.1, "size": "cpu", "stride": 10,
          "temperature": 0.0, "threads": 1, "translation_epochs": 60, "vq_decoder_epochs": 10, "vq_epochs": 15,
-         "weakened_decoder": False, "words": "minilm-static"},
+         "weakened_decoder": False, "words": "minilm-static", "conditioned_decoder": False},
         {"aligned": False, "dae_epochs": 20, "reset_dead_codes": False, "scale_floor": 0.0, "size": "paper",
-         "translation_epochs": 250, "vq_decoder_epochs": 20, "vq_epochs": 20, "weakened_decoder": True}),
+         "translation_epochs": 250, "vq_decoder_epochs": 20, "vq_epochs": 20, "weakened_decoder": True,
+         "conditioned_decoder": True}),
     "ferstl-mogan": (
         {"ablation": "none", "adversarial_learning_rate": 0.0005, "adversarial_steps": 400, "batch_size": 16,
          "classifier_epochs": 30, "discriminator_learning_rate": 0.0001, "discriminator_width": 64,

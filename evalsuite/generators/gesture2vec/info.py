@@ -13,6 +13,9 @@ DEVIATIONS = (
     "The translation decoder reads, beside its attention context, the mean (embedding, position) of the words "
     "starting in the chunk it emits and in the chunk before (aligned=true, default; aligned=false is the paper's "
     "attention alone): a monotonic alignment that small corpora do not learn from attention alone.",
+    "The VQ-DVAE decoder is by default a bidirectional GRU reading the code alone; the paper's conditioned decoder "
+    "(fed its own last frame) is conditioned_decoder=true (the paper preset), and it runs free from the frame "
+    "before the chunk where the original code feeds the ground truth for its first frames.",
     "Rotation representation: the corpus skeleton's local rotations as 3x3 matrices (as the paper) of the "
     "modelled joints; sizes are options and the CPU preset shrinks them.",
 )

@@ -5,7 +5,9 @@
 2. **VQ-DVAE** over chunks of 30 frames (stride 10 in training) of the 40-d latent pose and its derivative
    (80 features per frame, §4.2): a 2-layer bidirectional GRU encoder (hidden 200) whose last states give
    z in R^400; z is replaced by its nearest of K = 300 codebook vectors; a 2-layer bidirectional GRU decoder
-   reconstructs the chunk from the code. Loss (eq. 4): reconstruction + ||sg[z] - e||^2 + beta ||z - sg[e]||^2,
+   reconstructs the chunk from the code, or with ``conditioned_decoder`` (the paper's conditioned decoder, §4.3;
+   the original code's ``autoencoder_conditioned``) a GRU that reads the code and its own previous output frame
+   at every step, starting from the frame before the chunk. Loss (eq. 4): reconstruction + ||sg[z] - e||^2 + beta ||z - sg[e]||^2,
    gradients passed straight through the quantiser.
 3. **Translation** (§3.3): a 2-layer bidirectional GRU encoder over word embeddings and a GRU decoder with
    Bahdanau (additive) attention that emits one code index per chunk, trained with cross-entropy.
@@ -38,6 +40,7 @@ class G2VConfig:
     noise: float = 0.1
     dropout: float = 0.2
     aligned: bool = True            # the decoder also reads the words of its chunk and the one before (a deviation)
+    conditioned_decoder: bool = False   # the VQ-DVAE decoder is fed its last output frame (the paper's §4.3)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -69,8 +72,12 @@ class VQDVAE(nn.Module):
         self.code_dim = 2 * c.vq_hidden
         self.codebook = nn.Embedding(c.codebook, self.code_dim)
         nn.init.uniform_(self.codebook.weight, -1.0 / c.codebook, 1.0 / c.codebook)
-        self.decoder = nn.GRU(self.code_dim, c.vq_hidden, c.vq_layers, batch_first=True, bidirectional=True)
-        self.out = nn.Linear(2 * c.vq_hidden, feat)
+        if c.conditioned_decoder:   # one direction: each step reads the code and the frame it produced last
+            self.decoder = nn.GRU(self.code_dim + feat, c.vq_hidden, c.vq_layers, batch_first=True)
+            self.out = nn.Linear(c.vq_hidden, feat)
+        else:
+            self.decoder = nn.GRU(self.code_dim, c.vq_hidden, c.vq_layers, batch_first=True, bidirectional=True)
+            self.out = nn.Linear(2 * c.vq_hidden, feat)
 
     def encode(self, x: torch.Tensor) -> torch.Tensor:
         _, h = self.encoder(x)                    # (layers * 2, B, H)
@@ -79,9 +86,30 @@ class VQDVAE(nn.Module):
     def quantise(self, z: torch.Tensor) -> torch.Tensor:
         return torch.cdist(z, self.codebook.weight).argmin(dim=-1)
 
-    def decode(self, e: torch.Tensor) -> torch.Tensor:
-        seq, _ = self.decoder(e.unsqueeze(1).expand(-1, self.c.chunk, -1).contiguous())
-        return self.out(seq)
+    def decode(self, e: torch.Tensor, previous: torch.Tensor | None = None) -> torch.Tensor:
+        """Codes ``(B, code_dim)`` -> chunks ``(B, chunk, 2*latent)``. The conditioned decoder starts from
+        ``previous`` ``(B, 2*latent)``, the frame before each chunk (zeros when None), and is fed its own output."""
+        if not self.c.conditioned_decoder:
+            seq, _ = self.decoder(e.unsqueeze(1).expand(-1, self.c.chunk, -1).contiguous())
+            return self.out(seq)
+        frame = torch.zeros(len(e), self.out.out_features, dtype=e.dtype) if previous is None else previous
+        state, frames = None, []
+        for _ in range(self.c.chunk):
+            seq, state = self.decoder(torch.cat([e, frame], dim=-1).unsqueeze(1), state)
+            frame = self.out(seq[:, 0])
+            frames.append(frame)
+        return torch.stack(frames, dim=1)
+
+    def decode_sequence(self, e: torch.Tensor, start: torch.Tensor | None = None) -> torch.Tensor:
+        """Codes of consecutive chunks ``(N, code_dim)`` -> their frames ``(N, chunk, 2*latent)``; the conditioned
+        decoder carries each chunk's last frame into the next, from ``start`` ``(2*latent,)`` (zeros when None)."""
+        if not self.c.conditioned_decoder:
+            return self.decode(e)
+        frame, chunks = (None if start is None else start.reshape(1, -1)), []
+        for k in range(len(e)):
+            chunks.append(self.decode(e[k:k + 1], frame))
+            frame = chunks[-1][:, -1]
+        return torch.cat(chunks) if chunks else self.decode(e)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         z = self.encode(x)
@@ -90,7 +118,11 @@ class VQDVAE(nn.Module):
         codebook_loss = nn.functional.mse_loss(e, z.detach())
         commit_loss = nn.functional.mse_loss(z, e.detach())
         e_st = z + (e - z).detach()  # straight-through estimator
-        recon = self.decode(e_st)
+        previous = None
+        if self.c.conditioned_decoder:   # the frame before the chunk: latent - its difference, that difference
+            latent, diff = x[:, 0].split(self.c.latent_dim, dim=-1)
+            previous = torch.cat([latent - diff, diff], dim=-1)
+        recon = self.decode(e_st, previous)
         return recon, idx, codebook_loss + self.c.commitment * commit_loss
 
 

@@ -27,6 +27,11 @@ OPTIONS = Options("gesture2vec", (
            "then trained alone in the second", allowed="true, false", paper=True,
            source=f"{Y} §4.3: the decoder frozen while the encoder and codebook learn, then trained alone",
            code="autoencoder_fixed_weight: False in the configs"),
+    Option("conditioned_decoder", "bool", False, "false (default): the VQ-DVAE decoder is a bidirectional GRU that "
+           "reads the code alone; true: a GRU fed the code and its own last output frame at every step, starting "
+           "from the frame before the chunk (the paper's conditioned decoder, §4.3; at generation each chunk starts "
+           "from the last frame of the one before)", allowed="true, false", paper=True,
+           source=f"{Y} §4.3: the decoder conditioned on its last output (autoencoder_conditioned in the code)"),
     Option("dae_epochs", "int", 10, "frame autoencoder epochs (default 10; paper 20)", allowed=">= 1", paper=20,
            source=f"{Y} §4.1: 20 epochs"),
     Option("vq_epochs", "int", 15, "VQ-DVAE epochs (default 15; paper 20)", allowed=">= 1", paper=20,

@@ -118,7 +118,8 @@ class Gesture2Vec(Generator):
         vposes = [rep.encode(s.load_motion()) for s in val]
         vwords = [_word_track(s.transcript, embedder) for s in val]
         config = G2VConfig(pose_dim=rep.dim, text_dim=embedder.dim, chunk=st["chunk"], stride=st["stride"],
-                           codebook=st["codebook"], aligned=st["aligned"], **SIZES[st["size"]])
+                           codebook=st["codebook"], aligned=st["aligned"],
+                           conditioned_decoder=st["conditioned_decoder"], **SIZES[st["size"]])
         stages = G2VStages(dae_epochs=st["dae_epochs"], vq_epochs=st["vq_epochs"],
                            vq_decoder_epochs=st["vq_decoder_epochs"], translation_epochs=st["translation_epochs"],
                            learning_rate=st["learning_rate"], translation_learning_rate=st["learning_rate"],

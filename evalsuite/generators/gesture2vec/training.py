@@ -302,7 +302,9 @@ def generate_gesture2vec(model: TrainedG2V, words: WordTrack, n_frames: int, *, 
                           else np.zeros((c.chunk, c.pose_dim), np.float32))
         norm = np.concatenate(pieces)
     else:
-        latent = model.vq.decode(model.vq.codebook(codes))[..., :c.latent_dim]
+        # a conditioned decoder carries its last frame across chunks, starting from the mean pose at rest
+        start = torch.cat([model.dae.encoder(torch.zeros(1, c.pose_dim))[0], torch.zeros(c.latent_dim)])
+        latent = model.vq.decode_sequence(model.vq.codebook(codes), start)[..., :c.latent_dim]
         norm = model.dae.decoder(latent.reshape(-1, c.latent_dim)).numpy()
     poses = norm[:n_frames] * model.pose_scale + model.pose_mean
     return poses.astype(np.float64), codes.numpy()
