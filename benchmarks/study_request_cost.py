@@ -1,0 +1,172 @@
+"""CPU and SQL statements per request of the study server, in one process (no network, no gunicorn).
+
+N participants walk the load-test study of ``benchmarks/study_load.py`` (consent, 3 pairwise, 2 MUSHRA pages)
+one after another through the app's WSGI interface (Flask's test client), with the media server set to nginx
+(the app only authorises a video, nginx would send it). For each request kind (entry, page, answer, media
+authorisation) it prints the process CPU time per request (``time.process_time``) and the SQL statements per
+request (SQLAlchemy ``before_cursor_execute`` events), on SQLite (WAL, synchronous=FULL) and on PostgreSQL.
+
+    python benchmarks/study_request_cost.py                        # SQLite and a throwaway PostgreSQL
+    python benchmarks/study_request_cost.py --databases sqlite --participants 50
+    python benchmarks/study_request_cost.py --database-url postgresql://user@host/db
+
+Run it on the commit before a change and after it to compare (the figures are per request, so the machine's
+load matters less than for study_load.py; the load average is printed beside them).
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import os
+import secrets
+import shutil
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+
+KINDS = ("entry", "page", "answer", "media")
+PROLIFIC_STUDY = "5e" * 12
+
+
+def walk(app, pid, rng, cost):
+    """One participant through the whole study; adds (CPU seconds, statements) per request to ``cost``."""
+    from study_load import CSRF_RE, PAGE_DATA_RE, Client
+
+    client = app.test_client()
+    counter = app.extensions["evalsuite_sql_counter"]
+
+    def timed(kind, call, *args, **kw):
+        counter[0] = 0
+        t0 = time.process_time()
+        r = call(*args, **kw)
+        cost[kind].append((time.process_time() - t0, counter[0]))
+        return r
+
+    r = timed("entry", client.get, f"/start/load-test?PROLIFIC_PID={pid}&STUDY_ID={PROLIFIC_STUDY}&SESSION_ID=s{pid}")
+    assert r.status_code == 302, r.status_code
+    sid = r.headers["Location"].split("/s/")[1].strip("/")
+    answers = 0
+    while True:
+        r = timed("page", client.get, f"/s/{sid}/")
+        html = r.get_data(as_text=True)
+        m = PAGE_DATA_RE.search(html)
+        if m is None:
+            assert "LOADDONE" in html, html[:300]
+            return answers
+        data = json.loads(m.group(1))
+        csrf = CSRF_RE.search(html).group(1)
+        for video in data["videos"]:
+            v = timed("media", client.get, video)
+            assert v.status_code == 200, v.status_code
+        answer = Client.answer(_Rng(rng), data)
+        events = [{"id": secrets.token_hex(8), "kind": k, "slot": s, "t": 0.0, "ms": 1}
+                  for s in range(len(data["videos"])) for k in ("play", "ended")]
+        body = {"token": secrets.token_hex(12), "answer": answer, "events": events}
+        a = timed("answer", client.post, data["answer_url"], json=body, headers={"X-CSRFToken": csrf})
+        assert a.status_code == 200 and a.get_json()["status"] == "stored", (a.status_code, a.get_data()[:300])
+        answers += 1
+
+
+class _Rng:
+    """What ``study_load.Client.answer`` reads of a client: its random generator."""
+
+    def __init__(self, rng):
+        self.rng = rng
+
+
+def measure(study, url, participants, secret):
+    """{kind: (requests, CPU ms per request, statements per request)} for ``participants`` walks."""
+    from sqlalchemy import event
+
+    from study_app import create_app
+    from study_app.context import store_of
+
+    app = create_app({"STUDY": study, "DATABASE_URL": url, "SECRET_KEY": secret, "ADMIN_TOKEN": secret,
+                      "SESSION_COOKIE_SECURE": False, "MEDIA_SERVER": "nginx",
+                      "MEDIA_ACCESS_LOG": os.path.join(os.path.dirname(study), "media.log"),
+                      "INSTANCE_PATH": os.path.join(os.path.dirname(study), "inst")})
+    counter = [0]
+    app.extensions["evalsuite_sql_counter"] = counter
+
+    def count(*_args):
+        counter[0] += 1
+
+    event.listen(store_of(app).engine, "before_cursor_execute", count)
+    rng = np.random.default_rng(0)
+    walk(app, secrets.token_hex(12), rng, collections.defaultdict(list))   # imports, template caches
+    cost: dict[str, list] = collections.defaultdict(list)
+    for i in range(participants):
+        walk(app, f"{i:08x}{secrets.token_hex(8)}", rng, cost)
+    store_of(app).engine.dispose()
+    out = {}
+    for kind in KINDS:
+        rows = cost.get(kind, [])
+        if rows:
+            cpu = sum(c for c, _ in rows) / len(rows)
+            sql = sum(s for _, s in rows) / len(rows)
+            out[kind] = (len(rows), 1000 * cpu, sql)
+    return out
+
+
+def report(name, figures):
+    print(f"{name}")
+    print(f"  {'request':<8} {'count':>6} {'CPU ms':>8} {'SQL stmts':>10}")
+    for kind, (n, cpu, sql) in figures.items():
+        print(f"  {kind:<8} {n:>6} {cpu:>8.2f} {sql:>10.1f}")
+    if "page" in figures and "answer" in figures:
+        print(f"  answer + its next page: {figures['answer'][1] + figures['page'][1]:.2f} ms CPU, "
+              f"{figures['answer'][2] + figures['page'][2]:.1f} statements")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--participants", type=int, default=30, help="participants walking the study per database")
+    ap.add_argument("--databases", default="sqlite,postgresql",
+                    help="comma-separated databases to measure, of sqlite, postgresql (a throwaway cluster)")
+    ap.add_argument("--database-url", default=None,
+                    help="measure this (empty) database instead of a throwaway PostgreSQL cluster")
+    args = ap.parse_args()
+    from study_load import STUDY
+
+    from study_app.definition import load_study
+    from study_app.design import build_plans, default_plans_path, write_plans
+    from study_app.samples import make_sample_stimuli
+    from study_app.testing import create_database, throwaway_postgres
+
+    tmp = tempfile.mkdtemp(prefix="study-cost-")
+    try:
+        make_sample_stimuli(os.path.join(tmp, "stim"), ["SYSA", "SYSB", "SYSC"], ["seg01", "seg02", "seg03"],
+                            seconds=0.5)
+        study = os.path.join(tmp, "study.yaml")
+        with open(study, "w") as fh:
+            fh.write(STUDY.format(sessions=args.participants + 5))
+        st = load_study(study)
+        write_plans(build_plans(st), default_plans_path(st))
+        secret = secrets.token_hex(16)
+        print(f"{args.participants} participants, 6 answers each, one after another through the WSGI app; "
+              f"{os.cpu_count()} CPUs, load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+        dbs = [d.strip() for d in args.databases.split(",") if d.strip()]
+        if "sqlite" in dbs:
+            report("SQLite (WAL, synchronous=FULL)",
+                   measure(study, f"sqlite:///{tmp}/cost.db", args.participants, secret))
+        if args.database_url:
+            report(f"PostgreSQL {args.database_url.split('@')[-1]}",
+                   measure(study, args.database_url, args.participants, secret))
+        elif "postgresql" in dbs:
+            with throwaway_postgres(fsync=True) as server:
+                report("PostgreSQL (throwaway cluster, fsync on)",
+                       measure(study, create_database(server, "cost"), args.participants, secret))
+        print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
