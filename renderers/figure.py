@@ -105,17 +105,24 @@ DEFAULT_TESSELLATION = (1, 10)   # FigureStyle's sphere_subdivisions, cylinder_s
 def templates_from_trimesh(sphere_subdivisions: int, cylinder_sections: int) -> dict[str, np.ndarray]:
     """The stick figure's unit parts from trimesh: joint sphere ``s*`` (``icosphere(subdivisions)``), head
     sphere ``h*`` (``icosphere(subdivisions + 1)``) and bone cylinder ``c*`` (radius 1, z from 0 at the parent to
-    1 at the child); ``*v`` vertices (V, 3), ``*n`` vertex normals (V, 3), ``*f`` faces (K, 3)."""
+    1 at the child; its side, without end caps); ``*v`` vertices (V, 3), ``*n`` vertex normals (V, 3), ``*f`` faces
+    (K, 3)."""
     import trimesh
 
     cyl = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=cylinder_sections)
     cyl.apply_translation([0.0, 0.0, 0.5])
     out = {}
     for key, mesh in (("s", trimesh.creation.icosphere(subdivisions=sphere_subdivisions, radius=1.0)),
-                      ("h", trimesh.creation.icosphere(subdivisions=sphere_subdivisions + 1, radius=1.0)),
-                      ("c", cyl)):
+                      ("h", trimesh.creation.icosphere(subdivisions=sphere_subdivisions + 1, radius=1.0))):
         out[key + "v"], out[key + "n"] = np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals)
         out[key + "f"] = np.asarray(mesh.faces)
+    # The bone is the cylinder's side alone: its end caps lie inside the joint spheres (a joint is wider than its
+    # bones, FigureMesh), where they cost a CPU rasteriser triangles that never show; side normals are radial.
+    side = np.abs(np.asarray(cyl.face_normals)[:, 2]) < 0.5
+    used, faces = np.unique(np.asarray(cyl.faces)[side], return_inverse=True)
+    v = np.asarray(cyl.vertices)[used]
+    out["cv"], out["cf"] = v, faces.reshape(-1, 3)
+    out["cn"] = np.concatenate([v[:, :2] / np.linalg.norm(v[:, :2], axis=1, keepdims=True), np.zeros((len(v), 1))], 1)
     return out
 
 
