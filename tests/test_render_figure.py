@@ -133,4 +133,4 @@ def test_stored_stick_templates_are_trimeshs_parts():
     for key in made:
         np.testing.assert_allclose(stored[key], made[key], rtol=0, atol=1e-12, err_msg=key)
     finer = stick_templates(2, 16)
-    assert len(finer["sv"]) == 162 and len(finer["cf"]) == 64
+    assert len(finer["sv"]) == 162 and len(finer["cf"]) == 32   # 16 sections, the side alone (2 triangles each)
