@@ -81,7 +81,8 @@ def create_app(config: dict) -> Flask:
     engine = make_engine(url)
     if init:
         init_db(engine, study, plans)
-    install(app, study, Store(engine, Rules.of(study), entry_pages=entry_pages(plans)))
+    install(app, study, Store(engine, Rules.of(study), entry_pages=entry_pages(plans),
+                             fixed_pages=not any(b.cfg.get("adaptive") for b in study.blocks.values())))
     if proxies:
         # Behind reverse proxies the client address is in X-Forwarded-For (the per-address limits use it).
         app.config["TRUSTED_PROXIES_SET"] = True

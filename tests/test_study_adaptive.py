@@ -280,3 +280,18 @@ def test_the_preregistration_draft_states_the_adaptive_stopping_rule(tmp_path):
     assert "**TO COMPLETE**: state whether data collection stops there" in rule
     plain = load_study(h.make_study(tmp_path / "plain"))
     assert "No interim analysis." in prereg_markdown(plain, build_plans(plain))
+
+
+def test_a_pair_chosen_in_one_server_process_is_seen_by_another(tmp_path):
+    # plan pages change here (the chosen pair), so no process may keep them (Store.fixed_pages is off)
+    app, other = _app(tmp_path, exploration=1.0, sessions=2), _app(tmp_path, exploration=1.0, sessions=2)
+    assert not store_of(other).fixed_pages
+    p = h.Participant(app.test_client(), h.valid_pid("worker001"))
+    assert p.enter().status_code == 302
+    _, data, csrf = p.page()
+    assert p.submit(data, csrf, {"agree": True, "website": ""}).status_code == 200
+    assert "chosen" not in h.plan_pages(other, p.sid)[1]        # read by the other process first
+    _, data, _ = p.page()                                        # this process chooses the pair
+    assert data["index"] == 1
+    assert "chosen" in h.plan_pages(other, p.sid)[1]
+    assert h.plan_pages(other, p.sid)[1] == h.plan_pages(app, p.sid)[1]

@@ -175,3 +175,57 @@ def test_submit_reports_what_it_did_as_a_submit_status(tmp_path, sqlite_url):
     assert store.submit(p.sid, 5, "tok-status-3", evaluate)[0] is SubmitStatus.AHEAD
     assert store.submit("no-such-session", 0, "tok-status-4", evaluate) == (SubmitStatus.MISSING, None, None)
     assert store.submit(q.sid, 0, "tok-status-5", evaluate)[0] is SubmitStatus.FULL     # the one plan is p's
+
+
+def _statements(store):
+    """A list that collects every SQL statement the store's engine sends from now on."""
+    from sqlalchemy import event
+    seen: list[str] = []
+    event.listen(store.engine, "before_cursor_execute", lambda conn, cur, stmt, *a: seen.append(stmt))
+    return seen
+
+
+def test_plan_pages_are_read_once_per_process_and_a_first_view_is_one_transaction(study_dir, db_url):
+    app = make_app(study_dir, db_url)
+    store = store_of(app)
+    assert store.fixed_pages            # no adaptive block
+    rng = np.random.default_rng(0)
+    p = h.Participant(app.test_client(), "pcache001")
+    p.enter()
+    walk_to(app, p, "pairwise", rng)    # the plan's pages are read here once
+    seen = _statements(store)
+    for _ in range(3):
+        _, data, _ = p.page()           # reloads
+        assert p.get(data["videos"][0]).status_code == 200
+    assert not [s for s in seen if "plans.pages" in s]
+    # a reload writes nothing: a read without the write lock (SQLite: a plain BEGIN, no BEGIN IMMEDIATE)
+    assert not [s for s in seen if "INSERT INTO page_views" in s or s.startswith("BEGIN IMMEDIATE")]
+    # a new page is written in one transaction, without a read before it
+    del seen[:]
+    _, data, csrf = p.page()
+    pages = h.plan_pages(app, p.sid)
+    assert p.submit(data, csrf, h.make_answer(h.study_of(app), pages[data["index"]], rng)).status_code == 200
+    del seen[:]
+    p.page()
+    assert sum(1 for s in seen if s.startswith("SELECT sessions.")) == 1
+    assert sum(1 for s in seen if "INSERT INTO page_views" in s) == 1
+
+
+def test_plans_topped_up_while_the_server_runs_are_handed_out(tmp_path):
+    from study_fixtures import export_rows
+
+    from study_app.operations import topup
+    h.make_study(tmp_path, sessions=1)
+    url = f"sqlite:///{tmp_path / 'study.db'}"
+    app = make_app(tmp_path, url)
+    first, _ = h.run_participant(app, app.test_client(), "pfirst001", np.random.default_rng(0))  # the only plan
+    assert h.Participant(app.test_client(), "plate0001").enter().status_code == 503      # full
+    other = make_app(tmp_path, url)                                # the CLI's store, another process
+    [key] = topup(store_of(other), h.study_of(other), 1)
+    p, _ = h.run_participant(app, app.test_client(), "plate0002", np.random.default_rng(1))
+    with store_of(app).Session() as db:
+        plan = db.get(Plan, db.get(ParticipantSession, p.sid).plan_id)
+        assert plan.key == key and plan.status == "used"
+        answered = {a.page_id for a in db.query(Answer).filter_by(session_id=p.sid)}
+    assert answered == {page["page"] for page in plan.pages if page["type"] != "finish"} - {None}
+    assert {r["participant"] for r in export_rows(app)} == {first.pid, p.pid}

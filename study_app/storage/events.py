@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
-from sqlalchemy import func, select
+from sqlalchemy import case, func, insert, select
 from sqlalchemy.orm import Session
 
 from study_app.policy import Rules
@@ -38,15 +38,21 @@ def add_events(db: Session, rules: Rules, session_id: str, page_index: int,
         new.append(e)
     if not new:
         return 0, ""
+    # one statement counts both groups on the page and in the session
     playback = Event.kind.in_(PLAYBACK_KINDS)
+    on_page = Event.page_index == page_index
+    counts = db.execute(select(
+        func.count(case((playback & on_page, 1))), func.count(case((playback, 1))),
+        func.count(case((~playback & on_page, 1))), func.count(case((~playback, 1))),
+    ).where(Event.session_id == session_id)).one()
     room, limit = {}, {}
-    for group, where in ((True, playback), (False, ~playback)):
-        counted = select(func.count(Event.id)).where(Event.session_id == session_id, where)
-        page_room = rules.events_per_page - (db.scalar(counted.where(Event.page_index == page_index)) or 0)
-        session_room = rules.events_per_session - (db.scalar(counted) or 0)
+    for group, (on_this_page, in_session) in ((True, counts[0:2]), (False, counts[2:4])):
+        page_room = rules.events_per_page - on_this_page
+        session_room = rules.events_per_session - in_session
         room[group] = max(0, min(page_room, session_room))
         limit[group] = "session" if session_room < page_room else "page"
     dropped, which = 0, ""
+    rows = []
     for e in new:
         group = e["kind"] in PLAYBACK_KINDS
         if not room[group]:
@@ -54,9 +60,12 @@ def add_events(db: Session, rules: Rules, session_id: str, page_index: int,
             which = limit[group]
             continue
         room[group] -= 1
-        db.add(Event(session_id=session_id, client_id=e["id"], page_index=page_index,
-                     kind=e["kind"], slot=e.get("slot"), media_time=e.get("t"),
-                     client_ms=e.get("ms"), detail=e.get("detail", "")))
+        rows.append({"session_id": session_id, "client_id": e["id"], "page_index": page_index,
+                     "kind": e["kind"], "slot": e.get("slot"), "media_time": e.get("t"),
+                     "client_ms": e.get("ms"), "detail": e.get("detail", "")})
+    if rows:
+        # append-only rows: one executemany, not the ORM's unit of work
+        db.execute(insert(Event), rows)
     return dropped, which
 
 

@@ -9,15 +9,15 @@ import time
 
 from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError, OperationalError
-from sqlalchemy.orm import sessionmaker
+from sqlalchemy.orm import defer, sessionmaker
 
 from study_app.errors import StudyStateError
 from study_app.media_log import MediaLog
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
-from study_app.served import served_by_page
-from study_app.storage.events import EventLog, add_events, slots_with
-from study_app.storage.pageviews import current_page
-from study_app.storage.tables import Answer, Entry, Event, MediaRequest, PageView, ParticipantSession, Plan, utcnow
+from study_app.storage.dump import dump
+from study_app.storage.events import add_events, slots_with
+from study_app.storage.pageviews import view_current_page
+from study_app.storage.tables import Answer, Entry, MediaRequest, PageView, ParticipantSession, Plan, utcnow
 
 __all__ = ["Store", "SubmitStatus"]
 
@@ -33,22 +33,23 @@ class SubmitStatus(str, enum.Enum):
     FULL = "full"              # a session without a plan answered its first page and no plan is free
 
 
-def _plan(db, sess: ParticipantSession) -> Plan:
-    """The plan a session holds."""
-    plan = db.get(Plan, sess.plan_id)
-    if plan is None:
-        raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
-    return plan
-
-
 class Store:
     """All database operations of the app; each method is one transaction."""
 
-    def __init__(self, engine, rules: Rules | None = None, entry_pages: list[dict] | None = None):
+    def __init__(self, engine, rules: Rules | None = None, entry_pages: list[dict] | None = None,
+                 fixed_pages: bool = False):
         """``rules``: the study's session policy settings (:class:`study_app.policy.Rules`);
         ``entry_pages``: what a session without a plan shows (:func:`study_app.design.entry_pages`; None:
-        every session reserves its plan when it is created)."""
+        every session reserves its plan when it is created); ``fixed_pages``: no plan's pages ever change
+        once stored (a study without adaptive blocks), so each plan's pages are read from the database once
+        per process and kept (plans added later, e.g. by a top-up, have new ids and are read when first
+        used)."""
         self.engine = engine
+        self.fixed_pages = fixed_pages
+        self._pages_of: dict[int, list[dict]] = {}
+        # Sessions whose current page this process showed (a hint only: which transaction to try first in
+        # view_current_page); forgotten when a session answers.
+        self._viewed: set[str] = set()
         self.rules = rules or Rules()
         self.entry_pages = entry_pages
         self.Session = sessionmaker(engine, expire_on_commit=False)
@@ -97,7 +98,8 @@ class Store:
                         ParticipantSession.study == study.id,
                         ParticipantSession.participant == participant)).first()
                     if existing is not None:
-                        self._check_expiry(db, existing, now)
+                        plan = db.get(Plan, existing.plan_id) if existing.plan_id is not None else None
+                        self._check_expiry(db, existing, plan, now)
                         return existing, "existing"
                     limit = study.new_sessions_per_address
                     if limit and address and self.recent_entries(db, study, address, now)[0] >= limit:
@@ -155,58 +157,78 @@ class Store:
             return db.scalar(select(Plan.id).where(Plan.study == study_id, (Plan.status == "free") | (
                 (Plan.status == "reserved") & (Plan.reserved_until < now))).limit(1)) is not None
 
-    def _pages(self, db, sess: ParticipantSession) -> list[dict]:
+    def session_and_plan(self, db, session_id: str, lock: bool = False):
+        """(session, its plan or None) in one statement, (None, None) for an unknown session; the plan's pages
+        are read only when asked for (:meth:`pages_of`). ``lock``: lock the session row (PostgreSQL)."""
+        stmt = (select(ParticipantSession, Plan).outerjoin(Plan, Plan.id == ParticipantSession.plan_id)
+                .where(ParticipantSession.id == session_id).options(defer(Plan.pages)))
+        if lock and self.is_postgres:
+            stmt = stmt.with_for_update(of=ParticipantSession)
+        row = db.execute(stmt).first()
+        if row is None:
+            return None, None
+        sess, plan = row
+        if plan is None and sess.plan_id is not None:
+            raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
+        return sess, plan
+
+    def pages_of(self, plan_id: int, read) -> list[dict]:
+        """A plan's pages, ``read()`` unless kept: they are kept per process when they never change
+        (``fixed_pages``). Callers never modify them."""
+        pages = self._pages_of.get(plan_id) if self.fixed_pages else None
+        if pages is None:
+            pages = read()
+            if self.fixed_pages and pages is not None:
+                self._pages_of[plan_id] = pages
+        return pages
+
+    def _pages(self, sess, plan: Plan | None) -> list[dict]:
         """The pages a session shows: its plan's, or the entry pages while it holds no plan."""
-        if sess.plan_id is None:
+        if plan is None:
             if self.entry_pages is None:
                 raise StudyStateError(f"session {sess.id} holds no plan and this study has no entry pages")
             return self.entry_pages
-        return _plan(db, sess).pages
+        return self.pages_of(plan.id, lambda: plan.pages)
 
-    def _expiry_due(self, db, sess, now) -> bool:
+    @staticmethod
+    def _expiry_due(sess, plan, now) -> bool:
         """Whether the session's plan reservation ran out (and :meth:`release_expired` must run)."""
-        if sess.status != "active" or sess.plan_id is None:
+        if sess.status != "active" or plan is None:
             return False
-        plan = db.get(Plan, sess.plan_id)
-        return plan is not None and plan.status == "reserved" and plan.reserved_until < now
+        return plan.status == "reserved" and plan.reserved_until < now
 
-    def _check_expiry(self, db, sess, now):
-        if self._expiry_due(db, sess, now):
+    def _check_expiry(self, db, sess, plan, now):
+        if self._expiry_due(sess, plan, now):
             self.release_expired(db, sess.study, now)
 
     def load(self, session_id: str):
         """(session, plan pages) of a participant's session, or (None, None)."""
         now = utcnow()
         with self.Session.begin() as db:
-            sess = db.get(ParticipantSession, session_id)
+            sess, plan = self.session_and_plan(db, session_id)
             if sess is None:
                 return None, None
-            self._check_expiry(db, sess, now)
-            return sess, self._pages(db, sess)
+            self._check_expiry(db, sess, plan, now)
+            return sess, self._pages(sess, plan)
 
     def read_session(self, session_id: str):
-        """(session, plan pages) without touching reservations (read-only, no lock)."""
+        """(session, plan pages) without touching reservations (read-only, no lock); the session is a row of
+        its ``id``, ``status``, ``current_page`` and ``plan_id`` only (no ORM object: a video request's check)."""
         with self.ReadSession() as db:
-            sess = db.get(ParticipantSession, session_id)
+            sess = db.execute(select(ParticipantSession.id, ParticipantSession.status,
+                                     ParticipantSession.current_page, ParticipantSession.plan_id)
+                              .where(ParticipantSession.id == session_id)).first()
             if sess is None:
                 return None, None
-            return sess, self._pages(db, sess)
+            pages = None if sess.plan_id is None else self.pages_of(
+                sess.plan_id, lambda: db.scalar(select(Plan.pages).where(Plan.id == sess.plan_id)))
+            if pages is None and sess.plan_id is not None:
+                raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
+            return sess, pages if pages is not None else self._pages(sess, None)
 
     def view_current_page(self, session_id: str):
-        """A page view: the session, its plan, the current page's first-view record (created now if new,
-        with the autosaved draft) and the slots already played / played to the end. Returns None for an
-        unknown session.
-
-        Read without any lock when there is nothing to write (the page was shown before and the reservation
-        holds); otherwise one writing transaction, which skips the fsync (``RelaxedSession``): the first-view
-        time acknowledges nothing to the participant, so a page view never waits behind answers' fsyncs."""
-        now = utcnow()
-        with self.ReadSession() as db:
-            seen = current_page(self, db, session_id, now, write=False)
-        if seen is not False:
-            return seen
-        with self.RelaxedSession.begin() as db:
-            return current_page(self, db, session_id, now, write=True)
+        """A page view (:func:`study_app.storage.pageviews.view_current_page`)."""
+        return view_current_page(self, session_id)
 
     def save_draft(self, session_id: str, page_index: int, draft: dict) -> bool:
         with self.Session.begin() as db:
@@ -252,8 +274,7 @@ class Store:
                 with self.Session.begin() as db:
                     # Lock the session first, then look for the token: a concurrent retry that
                     # waited for the lock then sees the committed first answer.
-                    sess = db.scalars(self._locked(select(ParticipantSession).where(
-                        ParticipantSession.id == session_id))).first()
+                    sess, plan = self.session_and_plan(db, session_id, lock=True)
                     if sess is None:
                         return SubmitStatus.MISSING, None, None
                     prior = db.scalars(select(Answer).where(Answer.submit_token == token)).first()
@@ -262,7 +283,7 @@ class Store:
                             return SubmitStatus.CONFLICT, None, sess
                         return SubmitStatus.DUPLICATE, prior, sess
                     now = utcnow()
-                    self._check_expiry(db, sess, now)
+                    self._check_expiry(db, sess, plan, now)
                     if sess.status == "active" and page_index > sess.current_page:
                         return SubmitStatus.AHEAD, None, sess
                     if sess.status != "active" or sess.current_page != page_index:
@@ -275,21 +296,22 @@ class Store:
                         if free is None:
                             return SubmitStatus.FULL, None, sess
                         self._reserve(db, sess, free, now)
-                    plan = _plan(db, sess)
-                    sub = validate(plan.pages, lambda kind: slots_with(db, session_id, page_index, kind))
+                        plan = free
+                    pages = self.pages_of(plan.id, lambda held=plan: held.pages)
+                    sub = validate(pages, lambda kind: slots_with(db, session_id, page_index, kind))
                     dropped, _ = add_events(db, self.rules, session_id, page_index, sub.events)
                     view = db.scalars(select(PageView).where(PageView.session_id == session_id,
                                                              PageView.page_index == page_index)).first()
                     shown = view.shown_at if view else now
                     answer = Answer(submit_token=token, session_id=session_id, page_index=page_index,
-                                    page_id=plan.pages[page_index]["page"], data=sub.data,
+                                    page_id=pages[page_index]["page"], data=sub.data,
                                     attention_passed=sub.outcome.attention, shown_at=shown, answered_at=now,
                                     rt_ms=max(0, int((now - shown).total_seconds() * 1000)),
                                     client_rt_ms=sub.client_rt_ms)
                     db.add(answer)
                     answer.events_dropped = dropped     # reported to the client, not stored
                     state = SessionState(sess.current_page, sess.passed_checks, sess.failed_checks)
-                    move = after_answer(state, sub.outcome, plan.pages, self.rules)
+                    move = after_answer(state, sub.outcome, pages, self.rules)
                     sess.current_page, sess.updated_at = move.current_page, now
                     sess.passed_checks, sess.failed_checks = move.passed_checks, move.failed_checks
                     if move.honeypot:
@@ -299,6 +321,7 @@ class Store:
                     else:
                         # Sliding reservation: an active participant keeps their plan.
                         plan.reserved_until = now + dt.timedelta(minutes=self.rules.reservation_minutes)
+                self._viewed.discard(session_id)
                 return SubmitStatus.STORED, answer, sess
             except IntegrityError:
                 # A concurrent duplicate (same token, or same page) won the race: re-read.
@@ -323,27 +346,5 @@ class Store:
     # --- admin / export -------------------------------------------------------------------
 
     def dump(self, study_id: str) -> dict:
-        """Sessions, plans and answers of a study. The interaction log is not loaded: ``events`` is an
-        :class:`EventLog` that streams it from the database when iterated (raw JSON export), and
-        ``event_counts`` the number of events per session; ``media_requests`` and ``media_served`` (slot → bytes
-        sent, file length) per (session, page index)."""
-        self.media_log.flush()
-        with self.ReadSession() as db:
-            sessions = db.scalars(select(ParticipantSession).where(
-                ParticipantSession.study == study_id).order_by(ParticipantSession.created_at)).all()
-            plans = {p.id: p for p in db.scalars(select(Plan).where(Plan.study == study_id))}
-            of_study = ParticipantSession.study == study_id
-            answers = db.scalars(select(Answer).join(ParticipantSession, Answer.session_id == ParticipantSession.id)
-                                 .where(of_study).order_by(Answer.session_id, Answer.page_index)).all()
-            counts = {sid: n for sid, n in db.execute(
-                select(Event.session_id, func.count(Event.id))
-                .join(ParticipantSession, Event.session_id == ParticipantSession.id)
-                .where(of_study).group_by(Event.session_id))}
-            requested: dict[tuple[str, int], set[int]] = {}
-            for sid, index, slot in db.execute(
-                    select(MediaRequest.session_id, MediaRequest.page_index, MediaRequest.slot)
-                    .join(ParticipantSession, MediaRequest.session_id == ParticipantSession.id).where(of_study)):
-                requested.setdefault((sid, index), set()).add(slot)
-            return {"sessions": sessions, "plans": plans, "answers": answers, "media_served": served_by_page(db, study_id),
-                    "events": EventLog(self.ReadSession, study_id), "event_counts": counts, "media_requests": requested}
-
+        """Sessions, plans, answers and logs of a study (:func:`study_app.storage.dump.dump`)."""
+        return dump(self, study_id)
