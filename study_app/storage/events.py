@@ -10,15 +10,25 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
-from sqlalchemy import case, func, insert, select
+from sqlalchemy import bindparam, case, func, insert, select
 from sqlalchemy.orm import Session
 
 from study_app.policy import Rules
+from study_app.storage.statements import SLOTS_WITH
 from study_app.storage.tables import Event, ParticipantSession
 
 __all__ = ["PLAYBACK_KINDS", "add_events", "slots_with", "EventLog"]
 
 PLAYBACK_KINDS = ("play", "ended")     # the events the server's playback check reads
+
+
+_KNOWN = select(Event.client_id).where(Event.session_id == bindparam("sid"),
+                                      Event.client_id.in_(bindparam("ids", expanding=True)))
+# one statement counts both groups (playback or not) on the page and in the session
+_PLAYBACK, _ON_PAGE = Event.kind.in_(PLAYBACK_KINDS), Event.page_index == bindparam("index")
+_COUNTS = select(func.count(case((_PLAYBACK & _ON_PAGE, 1))), func.count(case((_PLAYBACK, 1))),
+                 func.count(case((~_PLAYBACK & _ON_PAGE, 1))), func.count(case((~_PLAYBACK, 1)))
+                 ).where(Event.session_id == bindparam("sid"))
 
 
 def add_events(db: Session, rules: Rules, session_id: str, page_index: int,
@@ -28,8 +38,7 @@ def add_events(db: Session, rules: Rules, session_id: str, page_index: int,
     if not events:
         return 0, ""
     ids = [e["id"] for e in events]
-    known = set(db.scalars(select(Event.client_id).where(Event.session_id == session_id,
-                                                         Event.client_id.in_(ids))))
+    known = set(db.scalars(_KNOWN, {"sid": session_id, "ids": ids}))
     new = []
     for e in events:
         if e["id"] in known:
@@ -38,13 +47,7 @@ def add_events(db: Session, rules: Rules, session_id: str, page_index: int,
         new.append(e)
     if not new:
         return 0, ""
-    # one statement counts both groups on the page and in the session
-    playback = Event.kind.in_(PLAYBACK_KINDS)
-    on_page = Event.page_index == page_index
-    counts = db.execute(select(
-        func.count(case((playback & on_page, 1))), func.count(case((playback, 1))),
-        func.count(case((~playback & on_page, 1))), func.count(case((~playback, 1))),
-    ).where(Event.session_id == session_id)).one()
+    counts = db.execute(_COUNTS, {"sid": session_id, "index": page_index}).one()
     room, limit = {}, {}
     for group, (on_this_page, in_session) in ((True, counts[0:2]), (False, counts[2:4])):
         page_room = rules.events_per_page - on_this_page
@@ -71,9 +74,7 @@ def add_events(db: Session, rules: Rules, session_id: str, page_index: int,
 
 def slots_with(db: Session, session_id: str, page_index: int, kind: str) -> set[int]:
     """The media slots of a page with a logged event of ``kind``."""
-    return set(db.scalars(select(Event.slot).where(
-        Event.session_id == session_id, Event.page_index == page_index,
-        Event.kind == kind)))
+    return set(db.scalars(SLOTS_WITH, {"sid": session_id, "index": page_index, "kind": kind}))
 
 
 class EventLog:

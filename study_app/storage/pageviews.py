@@ -2,41 +2,63 @@
 lock when nothing needs writing, else in one writing transaction that creates the page's first-view record."""
 from __future__ import annotations
 
-from sqlalchemy import select
+import datetime as dt
+from typing import NamedTuple
 
-from study_app.storage.tables import Event, PageView, utcnow
+from sqlalchemy import insert
+
+from study_app.errors import StudyStateError
+from study_app.storage.statements import PAGES, PLAYED, SESSION_ROW, VIEW
+from study_app.storage.tables import PageView, utcnow
 
 __all__ = ["current_page", "view_current_page"]
+
+
+def _session_row(db, session_id: str):
+    """The session's columns and its plan's status and reservation end, as one row (no ORM object: a page
+    view only reads them)."""
+    return db.execute(SESSION_ROW, {"sid": session_id}).first()
 
 
 def current_page(store, db, session_id: str, now, write: bool):
     """(session, plan pages, first-view record, played slots) of a session's current page in ``db``, None
     for an unknown session; without ``write``, False when something must be written first (the page's
-    first view, or an expired reservation)."""
-    sess, plan = store.session_and_plan(db, session_id)
+    first view, or an expired reservation). The session is a row of its columns, the first-view record one
+    of ``shown_at`` and ``draft``."""
+    sess = _session_row(db, session_id)
     if sess is None:
         return None
-    if store._expiry_due(sess, plan, now):
+    if sess.status == "active" and sess.plan_status == "reserved" and sess.plan_reserved_until < now:
         if not write:
             return False
         store.release_expired(db, sess.study, now)
-    pages = store._pages(sess, plan)
+        sess = _session_row(db, session_id)
+    if sess.plan_id is None:
+        pages = store._pages(sess, None)
+    else:
+        pages = store.pages_of(sess.plan_id, lambda: db.scalar(PAGES, {"plan": sess.plan_id}))
+        if pages is None:
+            raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
     view = None
     played: dict[str, set] = {"play": set(), "ended": set()}
     if sess.status == "active":
         index = sess.current_page
-        view = db.scalars(select(PageView).where(PageView.session_id == session_id,
-                                                 PageView.page_index == index)).first()
+        view = db.execute(VIEW, {"sid": session_id, "index": index}).first()
         if view is None:
             if not write:
                 return False
-            view = PageView(session_id=session_id, page_index=index, shown_at=now)
-            db.add(view)
-        for kind, slot in db.execute(select(Event.kind, Event.slot).where(
-                Event.session_id == session_id, Event.page_index == index,
-                Event.kind.in_(("play", "ended")))):
+            db.execute(insert(PageView).values(session_id=session_id, page_index=index, shown_at=now))
+            view = FirstView(now, None)
+        for kind, slot in db.execute(PLAYED, {"sid": session_id, "index": index}):
             played[kind].add(slot)
     return sess, pages, view, played
+
+
+class FirstView(NamedTuple):
+    """A page's first-view record as a page view returns it when it created it."""
+
+    shown_at: dt.datetime
+    draft: dict | None
 
 
 def view_current_page(store, session_id: str):

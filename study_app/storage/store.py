@@ -9,11 +9,12 @@ import time
 
 from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError, OperationalError
-from sqlalchemy.orm import defer, sessionmaker
+from sqlalchemy.orm import sessionmaker
 
 from study_app.errors import StudyStateError
 from study_app.media_log import MediaLog
 from study_app.policy import Rules, SessionState, after_answer, plan_after_end
+from study_app.storage import statements as sq
 from study_app.storage.dump import dump
 from study_app.storage.events import add_events, slots_with
 from study_app.storage.pageviews import view_current_page
@@ -160,11 +161,8 @@ class Store:
     def session_and_plan(self, db, session_id: str, lock: bool = False):
         """(session, its plan or None) in one statement, (None, None) for an unknown session; the plan's pages
         are read only when asked for (:meth:`pages_of`). ``lock``: lock the session row (PostgreSQL)."""
-        stmt = (select(ParticipantSession, Plan).outerjoin(Plan, Plan.id == ParticipantSession.plan_id)
-                .where(ParticipantSession.id == session_id).options(defer(Plan.pages)))
-        if lock and self.is_postgres:
-            stmt = stmt.with_for_update(of=ParticipantSession)
-        row = db.execute(stmt).first()
+        stmt = sq.SESSION_AND_PLAN_LOCKED if lock and self.is_postgres else sq.SESSION_AND_PLAN
+        row = db.execute(stmt, {"sid": session_id}).first()
         if row is None:
             return None, None
         sess, plan = row
@@ -215,13 +213,11 @@ class Store:
         """(session, plan pages) without touching reservations (read-only, no lock); the session is a row of
         its ``id``, ``status``, ``current_page`` and ``plan_id`` only (no ORM object: a video request's check)."""
         with self.ReadSession() as db:
-            sess = db.execute(select(ParticipantSession.id, ParticipantSession.status,
-                                     ParticipantSession.current_page, ParticipantSession.plan_id)
-                              .where(ParticipantSession.id == session_id)).first()
+            sess = db.execute(sq.SESSION_STATE, {"sid": session_id}).first()
             if sess is None:
                 return None, None
             pages = None if sess.plan_id is None else self.pages_of(
-                sess.plan_id, lambda: db.scalar(select(Plan.pages).where(Plan.id == sess.plan_id)))
+                sess.plan_id, lambda: db.scalar(sq.PAGES, {"plan": sess.plan_id}))
             if pages is None and sess.plan_id is not None:
                 raise StudyStateError(f"session {sess.id} refers to plan {sess.plan_id}, which the database lacks")
             return sess, pages if pages is not None else self._pages(sess, None)
@@ -277,7 +273,7 @@ class Store:
                     sess, plan = self.session_and_plan(db, session_id, lock=True)
                     if sess is None:
                         return SubmitStatus.MISSING, None, None
-                    prior = db.scalars(select(Answer).where(Answer.submit_token == token)).first()
+                    prior = db.scalars(sq.ANSWER_BY_TOKEN, {"token": token}).first()
                     if prior is not None:
                         if prior.session_id != session_id or prior.page_index != page_index:
                             return SubmitStatus.CONFLICT, None, sess
@@ -300,9 +296,7 @@ class Store:
                     pages = self.pages_of(plan.id, lambda held=plan: held.pages)
                     sub = validate(pages, lambda kind: slots_with(db, session_id, page_index, kind))
                     dropped, _ = add_events(db, self.rules, session_id, page_index, sub.events)
-                    view = db.scalars(select(PageView).where(PageView.session_id == session_id,
-                                                             PageView.page_index == page_index)).first()
-                    shown = view.shown_at if view else now
+                    shown = db.scalar(sq.VIEW_SHOWN, {"sid": session_id, "index": page_index}) or now
                     answer = Answer(submit_token=token, session_id=session_id, page_index=page_index,
                                     page_id=pages[page_index]["page"], data=sub.data,
                                     attention_passed=sub.outcome.attention, shown_at=shown, answered_at=now,
