@@ -9,9 +9,10 @@ request (SQLAlchemy ``before_cursor_execute`` events), on SQLite (WAL, synchrono
     python benchmarks/study_request_cost.py                        # SQLite and a throwaway PostgreSQL
     python benchmarks/study_request_cost.py --databases sqlite --participants 50
     python benchmarks/study_request_cost.py --database-url postgresql://user@host/db
+    python benchmarks/study_request_cost.py --baseline HEAD~3      # and the ratio to an earlier commit
 
-Run it on the commit before a change and after it to compare (the figures are per request, so the machine's
-load matters less than for study_load.py; the load average is printed beside them).
+``--baseline REF`` measures that commit first (a temporary git worktree, in a child process) and prints each
+figure's ratio to it, so that both are measured under the same load; the load average is printed beside them.
 """
 from __future__ import annotations
 
@@ -21,13 +22,15 @@ import json
 import os
 import secrets
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# the code measured: this checkout, or a --baseline worktree (set by the parent run)
+ROOT = os.environ.get("EVALSUITE_BENCH_ROOT") or os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
 
@@ -115,14 +118,32 @@ def measure(study, url, participants, secret):
     return out
 
 
-def report(name, figures):
+def report(name, figures, base=None):
+    """Print one database's figures, with the ratio to ``base`` (the --baseline run's) where given."""
     print(f"{name}")
-    print(f"  {'request':<8} {'count':>6} {'CPU ms':>8} {'SQL stmts':>10}")
-    for kind, (n, cpu, sql) in figures.items():
-        print(f"  {kind:<8} {n:>6} {cpu:>8.2f} {sql:>10.1f}")
+    print(f"  {'request':<8} {'count':>6} {'CPU ms':>8} {'SQL stmts':>10}" + ("   CPU / baseline" if base else ""))
     if "page" in figures and "answer" in figures:
-        print(f"  answer + its next page: {figures['answer'][1] + figures['page'][1]:.2f} ms CPU, "
-              f"{figures['answer'][2] + figures['page'][2]:.1f} statements")
+        figures = {**figures, "answer+page": (figures["answer"][0], figures["answer"][1] + figures["page"][1],
+                                              figures["answer"][2] + figures["page"][2])}
+    for kind, (n, cpu, sql) in figures.items():
+        ratio = ""
+        if base and kind in base:
+            ratio = f"   {cpu / base[kind][1]:.2f}x (baseline {base[kind][1]:.2f} ms, {base[kind][2]:.1f} stmts)"
+        print(f"  {kind:<8} {n:>6} {cpu:>8.2f} {sql:>10.1f}{ratio}")
+    return figures
+
+
+def run_baseline(ref, argv):
+    """The same measurement of git ref ``ref`` (a temporary worktree, in a child process): {database: figures}."""
+    wt = tempfile.mkdtemp(prefix="study-cost-baseline-")
+    subprocess.run(["git", "-C", ROOT, "worktree", "add", "--detach", wt, ref], check=True, capture_output=True)
+    try:
+        env = {**os.environ, "EVALSUITE_BENCH_ROOT": wt, "PYTHONPATH": wt}
+        out = subprocess.run([sys.executable, os.path.abspath(__file__), *argv, "--json"], env=env, check=True,
+                             capture_output=True, text=True).stdout
+        return json.loads(out.strip().splitlines()[-1])
+    finally:
+        subprocess.run(["git", "-C", ROOT, "worktree", "remove", "--force", wt], capture_output=True)
 
 
 def main():
@@ -132,7 +153,18 @@ def main():
                     help="comma-separated databases to measure, of sqlite, postgresql (a throwaway cluster)")
     ap.add_argument("--database-url", default=None,
                     help="measure this (empty) database instead of a throwaway PostgreSQL cluster")
+    ap.add_argument("--baseline", default=None,
+                    help="also measure this git ref (e.g. HEAD~3) in a temporary worktree first and print each "
+                         "figure's ratio to it")
+    ap.add_argument("--json", action="store_true", help="print the figures as one JSON line only (for --baseline)")
     args = ap.parse_args()
+    base: dict = {}
+    if args.baseline:
+        argv = ["--participants", str(args.participants), "--databases", args.databases]
+        if args.database_url:
+            argv += ["--database-url", args.database_url]
+        print(f"measuring the baseline {args.baseline} first ...", flush=True)
+        base = run_baseline(args.baseline, argv)
     from study_load import STUDY
 
     from study_app.definition import load_study
@@ -150,19 +182,30 @@ def main():
         st = load_study(study)
         write_plans(build_plans(st), default_plans_path(st))
         secret = secrets.token_hex(16)
-        print(f"{args.participants} participants, 6 answers each, one after another through the WSGI app; "
-              f"{os.cpu_count()} CPUs, load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+        out: dict = {}
+        say = (lambda *a, **k: None) if args.json else print
+        say(f"{args.participants} participants, 6 answers each, one after another through the WSGI app; "
+            f"{os.cpu_count()} CPUs, load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
         dbs = [d.strip() for d in args.databases.split(",") if d.strip()]
         if "sqlite" in dbs:
-            report("SQLite (WAL, synchronous=FULL)",
-                   measure(study, f"sqlite:///{tmp}/cost.db", args.participants, secret))
+            out["sqlite"] = measure(study, f"sqlite:///{tmp}/cost.db", args.participants, secret)
         if args.database_url:
-            report(f"PostgreSQL {args.database_url.split('@')[-1]}",
-                   measure(study, args.database_url, args.participants, secret))
+            out["postgresql"] = measure(study, args.database_url, args.participants, secret)
         elif "postgresql" in dbs:
             with throwaway_postgres(fsync=True) as server:
-                report("PostgreSQL (throwaway cluster, fsync on)",
-                       measure(study, create_database(server, "cost"), args.participants, secret))
+                out["postgresql"] = measure(study, create_database(server, "cost"), args.participants, secret)
+        if args.json:
+            print(json.dumps(out))
+            return
+        names = {"sqlite": "SQLite (WAL, synchronous=FULL)",
+                 "postgresql": "PostgreSQL " + (args.database_url.split("@")[-1] if args.database_url
+                                                else "(throwaway cluster, fsync on)")}
+        for db, figures in out.items():
+            baseline = base.get(db)
+            if baseline and "page" in baseline and "answer" in baseline:
+                baseline["answer+page"] = (baseline["answer"][0], baseline["answer"][1] + baseline["page"][1],
+                                           baseline["answer"][2] + baseline["page"][2])
+            report(names[db] + (f", against {args.baseline}" if baseline else ""), figures, baseline)
         print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -315,7 +315,10 @@ class Store:
                     else:
                         # Sliding reservation: an active participant keeps their plan.
                         plan.reserved_until = now + dt.timedelta(minutes=self.rules.reservation_minutes)
-                self._viewed.discard(session_id)
+                if sess.status == "active":
+                    self._viewed.discard(session_id)      # its next page is new: written at its first view
+                else:
+                    self._viewed.add(session_id)          # an ended session's page writes nothing: read first
                 return SubmitStatus.STORED, answer, sess
             except IntegrityError:
                 # A concurrent duplicate (same token, or same page) won the race: re-read.
