@@ -137,13 +137,10 @@ class Client:
         self.sid = loc.split("/s/")[1].strip("/")
         while True:
             code, html, _ = self.request("page", f"/s/{self.sid}/")
-            html = html.decode()
-            m = PAGE_DATA_RE.search(html)
-            if m is None:
-                assert "LOADDONE" in html, html[:500]
+            form = page_form(html.decode())
+            if form is None:
                 return self
-            data = json.loads(m.group(1))
-            csrf = CSRF_RE.search(html).group(1)
+            data, csrf = form
             for video in data["videos"]:         # the browser loads every video of the page
                 code, body, _ = self.request("video", video)
                 assert code == 200 and body, code
@@ -151,10 +148,8 @@ class Client:
             if self.think[1] > 0:
                 time.sleep(float(self.rng.uniform(*self.think)))      # watching and deciding
             token = secrets.token_hex(12)
-            events = [{"id": secrets.token_hex(8), "kind": k, "slot": s, "t": 0.0, "ms": 1}
-                      for s in range(len(data["videos"])) for k in ("play", "ended")]
             code, payload, _ = self.request("answer", data["answer_url"],
-                                            {"token": token, "answer": answer, "events": events},
+                                            {"token": token, "answer": answer, "events": playback_events(data)},
                                             {"X-CSRFToken": csrf})
             if code == 409:
                 continue   # a retry after a crash found the page already answered by this token
@@ -162,15 +157,34 @@ class Client:
             self.acked.append((self.sid, data["index"], token, answer, json.loads(payload)["status"]))
 
     def answer(self, data):
-        t = data["type"]
-        if t == "consent":
-            return {"agree": True, "website": ""}
-        if t == "pairwise":
-            return {"choices": {"human_likeness": ["left", "equal", "right"][int(self.rng.integers(3))]},
-                    "reasons": []}
-        if t == "mushra":
-            return {"ratings": [int(v) for v in self.rng.integers(0, 101, len(data["videos"]))]}
-        return {}
+        return choose_answer(self.rng, data)
+
+
+def page_form(html: str):
+    """``(page data, CSRF token)`` of a study page, or None on the finish page."""
+    m = PAGE_DATA_RE.search(html)
+    if m is None:
+        assert "LOADDONE" in html, html[:500]
+        return None
+    return json.loads(m.group(1)), CSRF_RE.search(html).group(1)
+
+
+def choose_answer(rng, data):
+    """A participant's random answer to the page ``data``."""
+    t = data["type"]
+    if t == "consent":
+        return {"agree": True, "website": ""}
+    if t == "pairwise":
+        return {"choices": {"human_likeness": ["left", "equal", "right"][int(rng.integers(3))]}, "reasons": []}
+    if t == "mushra":
+        return {"ratings": [int(v) for v in rng.integers(0, 101, len(data["videos"]))]}
+    return {}
+
+
+def playback_events(data):
+    """A play and an ended event for every video of the page (as the player reports them)."""
+    return [{"id": secrets.token_hex(8), "kind": k, "slot": s, "t": 0.0, "ms": 1}
+            for s in range(len(data["videos"])) for k in ("play", "ended")]
 
 
 class _NoRedirect(urllib.request.HTTPRedirectHandler):

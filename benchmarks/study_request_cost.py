@@ -40,7 +40,7 @@ PROLIFIC_STUDY = "5e" * 12
 
 def walk(app, pid, rng, cost):
     """One participant through the whole study; adds (CPU seconds, statements) per request to ``cost``."""
-    from study_load import CSRF_RE, PAGE_DATA_RE, Client
+    from study_load import choose_answer, page_form, playback_events
 
     client = app.test_client()
     counter = app.extensions["evalsuite_sql_counter"]
@@ -57,31 +57,17 @@ def walk(app, pid, rng, cost):
     sid = r.headers["Location"].split("/s/")[1].strip("/")
     answers = 0
     while True:
-        r = timed("page", client.get, f"/s/{sid}/")
-        html = r.get_data(as_text=True)
-        m = PAGE_DATA_RE.search(html)
-        if m is None:
-            assert "LOADDONE" in html, html[:300]
+        form = page_form(timed("page", client.get, f"/s/{sid}/").get_data(as_text=True))
+        if form is None:
             return answers
-        data = json.loads(m.group(1))
-        csrf = CSRF_RE.search(html).group(1)
+        data, csrf = form
         for video in data["videos"]:
             v = timed("media", client.get, video)
             assert v.status_code == 200, v.status_code
-        answer = Client.answer(_Rng(rng), data)
-        events = [{"id": secrets.token_hex(8), "kind": k, "slot": s, "t": 0.0, "ms": 1}
-                  for s in range(len(data["videos"])) for k in ("play", "ended")]
-        body = {"token": secrets.token_hex(12), "answer": answer, "events": events}
+        body = {"token": secrets.token_hex(12), "answer": choose_answer(rng, data), "events": playback_events(data)}
         a = timed("answer", client.post, data["answer_url"], json=body, headers={"X-CSRFToken": csrf})
         assert a.status_code == 200 and a.get_json()["status"] == "stored", (a.status_code, a.get_data()[:300])
         answers += 1
-
-
-class _Rng:
-    """What ``study_load.Client.answer`` reads of a client: its random generator."""
-
-    def __init__(self, rng):
-        self.rng = rng
 
 
 def measure(study, url, participants, secret):
