@@ -46,6 +46,19 @@ def fit_audio(samples: np.ndarray, rate: int, n_frames: int, fps: float, label: 
     return fit_length(samples, int(round(keep / fps * rate))), keep
 
 
+# Up to this many pixels a frame, one x264 thread (veryfast) encodes faster than the renderer draws (about
+# 550 frames/s at 640x480 on one core of the benchmark machine), so more threads only compete with the
+# renderer's: x264's own choice (1.5 x cores, plus lookahead) took 1.17 s of CPU for 300 such frames where one
+# thread took 0.88 s, the same file size (docs/results/speed.md). Larger frames keep x264's choice.
+ONE_THREAD_PIXELS = 1280 * 720
+
+
+def x264_threads(width: int, height: int) -> int:
+    """x264's ``-threads`` for frames of ``width`` x ``height``: 1 up to :data:`ONE_THREAD_PIXELS`, else 0
+    (x264 chooses)."""
+    return 1 if int(width) * int(height) <= ONE_THREAD_PIXELS else 0
+
+
 class VideoWriter:
     """Write RGB frames to an H.264 MP4 (yuv420p, playable in every browser), audio optional.
 
@@ -56,6 +69,7 @@ class VideoWriter:
         audio: ``(samples (n, ch) float32, rate)`` already aligned with the video, or None.
         crf: x264 constant rate factor (18 = visually lossless, 23 = ffmpeg's default).
         bitrate: constant bitrate instead of ``crf`` (e.g. ``"400k"``; :func:`renderers.filesize.cbr_params`).
+        threads: x264's threads; None: :func:`x264_threads` of the frame size.
 
     Frames go to ffmpeg from a writer thread through a short queue (``QUEUE`` frames), so the caller renders
     the next frame while ffmpeg takes the previous one from the pipe (a write of a whole frame waits until
@@ -66,7 +80,7 @@ class VideoWriter:
     QUEUE = 4
 
     def __init__(self, path, width: int, height: int, fps: float, audio=None, crf: int = 20,
-                 preset: str = "veryfast", bitrate: str | None = None):
+                 preset: str = "veryfast", bitrate: str | None = None, threads: int | None = None):
         import imageio_ffmpeg
 
         self.path = pathlib.Path(path)
@@ -80,7 +94,8 @@ class VideoWriter:
             write_wav(self._wav, audio[0], audio[1])
             audio_path = self._wav
         rate = cbr_params(bitrate) if bitrate else ["-crf", str(int(crf))]
-        params = ["-preset", preset, *rate, "-movflags", "+faststart"]
+        threads = x264_threads(width, height) if threads is None else int(threads)
+        params = ["-preset", preset, *rate, "-threads", str(threads), "-movflags", "+faststart"]
         if audio is not None:
             params += ["-b:a", "128k"]
         self._gen = imageio_ffmpeg.write_frames(

@@ -386,3 +386,16 @@ def test_replayed_draws_and_partial_reads_give_pyrenders_own_frames(monkeypatch,
     assert len(fast) == len(slow) == len(pos)
     for k, (a, b) in enumerate(zip(fast, slow)):
         np.testing.assert_array_equal(a, b, err_msg=f"frame {k}")
+
+
+def test_x264_runs_one_thread_up_to_720p(tmp_path):
+    """Frames up to 1280x720 are encoded by one x264 thread (it keeps up with the renderer, whose cores it
+    would otherwise take); larger ones let x264 choose. x264 writes its settings into the stream."""
+    from renderers.video import VideoWriter, x264_threads
+
+    assert x264_threads(640, 480) == 1 and x264_threads(1280, 720) == 1 and x264_threads(1920, 1080) == 0
+    with VideoWriter(tmp_path / "v.mp4", 64, 48, 30.0) as writer:
+        for level in (40, 200):
+            writer.write(np.full((48, 64, 3), level, np.uint8))
+    data = (tmp_path / "v.mp4").read_bytes()
+    assert b" threads=1 " in data and b"lookahead_threads=1 " in data
