@@ -9,7 +9,9 @@ browsers can seek. Only pages up to the participant's current page are served.
 Who sends a stimulus file's bytes is the app's config ``MEDIA_SERVER`` (environment
 ``EVALSUITE_MEDIA_SERVER``): ``app`` (the default; no front server needed) sends them from the application
 thread; ``nginx`` answers the authorised request with ``X-Accel-Redirect`` and nginx sends the file
-(:mod:`study_app.media_nginx`), so a slow client never holds an application worker. ``MEDIA_ACCESS_LOG``
+(:mod:`study_app.media_nginx`), so a slow client never holds an application worker; ``nginx-signed`` gives
+the page signed URLs that nginx serves without asking the app at all (:mod:`study_app.media_signed`; this
+route then answers only generated media and old unsigned URLs, as ``nginx`` does). ``MEDIA_ACCESS_LOG``
 (``EVALSUITE_MEDIA_ACCESS_LOG``) is nginx's media log, read into the playback record (docs/deploy.md).
 Generated media (headphone-check sounds, small) is always sent by the app.
 """
@@ -29,7 +31,7 @@ from study_app.participant import _own
 from study_app.served import fully_served, record_served
 
 bp = Blueprint("media", __name__)
-MEDIA_SERVERS = ("app", "nginx")
+MEDIA_SERVERS = ("app", "nginx", "nginx-signed")
 
 
 @bp.record_once
@@ -40,9 +42,16 @@ def _configure(state) -> None:
     if server not in MEDIA_SERVERS:
         raise StudyStateError(f"expected one of {', '.join(MEDIA_SERVERS)}, got {server!r}", field="MEDIA_SERVER")
     access_log = config.setdefault("MEDIA_ACCESS_LOG", env.get("EVALSUITE_MEDIA_ACCESS_LOG"))
-    if server == "nginx" and not access_log:
-        raise StudyStateError("MEDIA_SERVER is nginx: set nginx's media log (deploy/nginx/evalsuite.conf.template) "
-                              "so that the playback record knows the bytes sent", field="MEDIA_ACCESS_LOG")
+    if server != "app" and not access_log:
+        raise StudyStateError(f"MEDIA_SERVER is {server}: set nginx's media log (deploy/nginx/evalsuite.conf."
+                              "template) so that the playback record knows the bytes sent", field="MEDIA_ACCESS_LOG")
+    if server == "nginx-signed":
+        for name in ("MEDIA_LINKS", "MEDIA_LINK_SECRET", "MEDIA_LINK_SECONDS"):
+            config.setdefault(name, env.get("EVALSUITE_" + name))
+            if not config[name] and name != "MEDIA_LINK_SECONDS":
+                raise StudyStateError("MEDIA_SERVER is nginx-signed: set the links folder and the secret nginx "
+                                      "checks signed URLs with (docs/deploy.md)", field=name)
+        os.makedirs(config["MEDIA_LINKS"], exist_ok=True)
     if access_log:
         store_of(state.app).media_log.access_log = access_log
 
@@ -80,7 +89,7 @@ def video(sid, index, slot):
         return resp
     if media.file not in study.manifest.by_file():
         abort(404)
-    if current_app.config["MEDIA_SERVER"] == "nginx":
+    if current_app.config["MEDIA_SERVER"] != "app":
         # nginx sends the file and logs the bytes it sent (study_app.media_nginx); nothing of the file's
         # name reaches the participant: nginx drops Last-Modified and ETag there (deploy/nginx).
         resp = Response(b"", mimetype=media.mimetype)

@@ -26,7 +26,8 @@ __all__ = ["SITE_TEMPLATE", "GUNICORN_CONF", "SITE_NAMES", "free_port", "render_
 DEPLOY = pathlib.Path(__file__).resolve().parents[1] / "deploy"
 SITE_TEMPLATE = DEPLOY / "nginx" / "evalsuite.conf.template"
 GUNICORN_CONF = DEPLOY / "gunicorn.conf.py"
-SITE_NAMES = ("NGINX_LISTEN", "NGINX_SERVER_NAME", "EVALSUITE_APP", "EVALSUITE_STIMULI", "EVALSUITE_MEDIA_ACCESS_LOG")
+SITE_NAMES = ("NGINX_LISTEN", "NGINX_SERVER_NAME", "EVALSUITE_APP", "EVALSUITE_STIMULI", "EVALSUITE_MEDIA_ACCESS_LOG",
+              "EVALSUITE_MEDIA_LINKS", "EVALSUITE_MEDIA_LINK_SECRET")
 
 
 def free_port() -> int:
@@ -109,9 +110,11 @@ class Gunicorn:
 
 class Nginx:
     """nginx on ``127.0.0.1:<port>`` in front of ``app`` (host:port), serving ``stimuli`` for the app and
-    logging what it sent to ``media_log`` (the app's ``EVALSUITE_MEDIA_ACCESS_LOG``)."""
+    logging what it sent to ``media_log`` (the app's ``EVALSUITE_MEDIA_ACCESS_LOG``); ``links`` and
+    ``link_secret``: the app's ``EVALSUITE_MEDIA_LINKS`` and ``EVALSUITE_MEDIA_LINK_SECRET`` (signed URLs)."""
 
-    def __init__(self, app: str, stimuli: str | os.PathLike, media_log: str | os.PathLike, workers: int = 1):
+    def __init__(self, app: str, stimuli: str | os.PathLike, media_log: str | os.PathLike, workers: int = 1,
+                 links: str | os.PathLike | None = None, link_secret: str = "unused-no-signed-media"):
         binary = nginx_binary()
         if binary is None:
             raise RuntimeError("nginx not found: install Debian's nginx package (scripts/install-system-packages)")
@@ -121,7 +124,9 @@ class Nginx:
         self.access_log = self.dir / "access.log"     # seconds nginx took per request, for the benchmark
         site = render_site({"NGINX_LISTEN": f"127.0.0.1:{self.port}", "NGINX_SERVER_NAME": "_",
                             "EVALSUITE_APP": app, "EVALSUITE_STIMULI": str(pathlib.Path(stimuli).resolve()),
-                            "EVALSUITE_MEDIA_ACCESS_LOG": self.media_log})
+                            "EVALSUITE_MEDIA_ACCESS_LOG": self.media_log,
+                            "EVALSUITE_MEDIA_LINKS": str(pathlib.Path(links or self.dir / "links").resolve()),
+                            "EVALSUITE_MEDIA_LINK_SECRET": link_secret})
         (self.dir / "site.conf").write_text(site)
         temp = "\n".join(f"    {k}_temp_path {self.dir / k};" for k in ("client_body", "proxy", "fastcgi", "uwsgi", "scgi"))
         user = "user root;\n" if os.geteuid() == 0 else ""      # workers must read the temporary folders

@@ -106,6 +106,10 @@ class MediaLog:
             for s, p, k, t in rows:
                 self.record(s, p, k, t)
 
+    def write_requests(self, rows: list) -> None:
+        """Write ``media_requests`` rows (session, page, slot, first time) now; a slot already recorded stays."""
+        self.write(INSERT, rows)
+
     def write_served(self, rows: list) -> None:
         """Write ``media_served`` rows (session, page, slot, first, last, total, status, time) now."""
         self.write(INSERT_SERVED, rows)

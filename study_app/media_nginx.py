@@ -37,13 +37,14 @@ from sqlalchemy.exc import DBAPIError
 
 from study_app.storage.tables import ParticipantSession
 
-__all__ = ["ACCEL_PREFIX", "accel_path", "parse_line", "ingest"]
+__all__ = ["ACCEL_PREFIX", "accel_path", "parse_line", "parse_request", "ingest"]
 
 log = logging.getLogger(__name__)
 
 ACCEL_PREFIX = "/_evalsuite_media/"
 LINE_RE = re.compile(r'^(\d+(?:\.\d+)?) (\d{3}) (\d+) (\S+) "([^"]*)" (\S+)$')
-URI_RE = re.compile(r"^/s/([A-Za-z0-9_-]+)/media/(\d+)/(\d+)(?:\?.*)?$")
+URI_RE = re.compile(r"^/s/([A-Za-z0-9_-]+)/media/(\d+)/(\d+)(/[0-9a-f]{32}(?:\.[a-z0-9]+)?)?(?:\?.*)?$")
+SIGNED_OK = {"200", "206", "304", "416"}      # a signed request nginx answered: the participant asked for it
 RANGE_RE = re.compile(r"^bytes (\d+)-(\d+)/(\d+)$")
 
 
@@ -77,6 +78,17 @@ def parse_line(line: str) -> tuple[str, int, int, int, int, int, int, dt.datetim
     return u.group(1), int(u.group(2)), int(u.group(3)), first, last, total, int(status), when
 
 
+def parse_request(line: str) -> tuple[str, int, int, dt.datetime] | None:
+    """A signed URL's access-log line (``MEDIA_SERVER = "nginx-signed"``: no app request recorded it) →
+    (session, page, slot, time) for ``media_requests``, or None (an unsigned URL, a refused request)."""
+    m = LINE_RE.match(line.rstrip("\n"))
+    u = URI_RE.match(m.group(4)) if m is not None else None
+    if m is None or u is None or u.group(4) is None or m.group(2) not in SIGNED_OK:
+        return None
+    when = dt.datetime.fromtimestamp(float(m.group(1)), dt.timezone.utc).replace(tzinfo=None)
+    return u.group(1), int(u.group(2)), int(u.group(3)), when
+
+
 def ingest(media_log, path: str) -> int:
     """Append the new lines of nginx's media log ``path`` to ``media_served``; returns the rows written."""
     try:
@@ -94,12 +106,21 @@ def ingest(media_log, path: str) -> int:
             except FileNotFoundError:
                 return 0
             complete = data[:data.rfind(b"\n") + 1]
-            rows = [r for r in map(parse_line, complete.decode("utf-8", "replace").splitlines()) if r is not None]
-            if rows:
+            lines = complete.decode("utf-8", "replace").splitlines()
+            rows = [r for r in map(parse_line, lines) if r is not None]
+            first: dict[tuple, tuple] = {}
+            for req in map(parse_request, lines):
+                if req is not None:
+                    first.setdefault(req[:3], req)            # one media_requests row per slot: its first time
+            asked = list(first.values())
+            if rows or asked:
                 with media_log.Session() as db:
                     known = set(db.scalars(select(ParticipantSession.id).where(
-                        ParticipantSession.id.in_({r[0] for r in rows}))))
+                        ParticipantSession.id.in_({r[0] for r in [*rows, *asked]}))))
                 rows = [r for r in rows if r[0] in known]
+                asked = [r for r in asked if r[0] in known]
+            if asked:
+                media_log.write_requests(asked)
             if rows:
                 media_log.write_served(rows)
             state.seek(0)

@@ -1,0 +1,79 @@
+"""Media served by nginx without an application request (``MEDIA_SERVER = "nginx-signed"``).
+
+When the app builds a page it gives each video slot a signed URL::
+
+    /s/<session>/media/<page>/<slot>/<key><ext>?md5=<signature>&expires=<unix time>
+
+``key`` = HMAC-SHA256(``SECRET_KEY``, ``link|session|page|slot``), first 32 hex digits: the participant cannot
+invert it, and it says nothing of the file (blinding; ``ext`` is the file's extension, as ``Content-Type``
+already says). The app makes ``<MEDIA_LINKS>/<key><ext>`` a symbolic link to the stimulus file; nginx serves
+that folder. ``signature`` is nginx's ``secure_link_md5 "$secure_link_expires$uri <MEDIA_LINK_SECRET>"``
+(base64url of MD5, no padding), so a URL cannot be forged, moved to another session, page or slot, or used
+after ``expires`` (``MEDIA_LINK_SECONDS``, default 3600; a reload of the page signs new URLs). A future page
+has neither a signed URL nor a link. nginx's media log (:mod:`study_app.media_nginx`) is then the whole
+playback record: the requests (``media_requests``) and the bytes sent (``media_served``).
+
+The trade-off: a URL works for whoever holds it until it expires (no session cookie is checked), and a
+session that was excluded or withdrawn keeps its already-signed URLs until then (docs/deploy.md).
+"""
+from __future__ import annotations
+
+import base64
+import contextlib
+import hashlib
+import hmac
+import os
+import threading
+import time
+
+from flask import current_app, url_for
+
+__all__ = ["link_key", "sign", "signed_url", "ensure_link", "video_url"]
+
+
+def link_key(secret_key: str, sid: str, index: int, slot: int) -> str:
+    """The opaque name of a page slot's link: HMAC-SHA256(secret, ``link|sid|index|slot``), 32 hex digits."""
+    return hmac.new(secret_key.encode(), f"link|{sid}|{index}|{slot}".encode(), hashlib.sha256).hexdigest()[:32]
+
+
+def sign(uri: str, expires: int, secret: str) -> str:
+    """nginx's ``secure_link_md5 "$secure_link_expires$uri <secret>"``: base64url(MD5(...)) without ``=``."""
+    digest = hashlib.md5(f"{expires}{uri} {secret}".encode()).digest()
+    return base64.urlsafe_b64encode(digest).rstrip(b"=").decode()
+
+
+def ensure_link(links: str, name: str, target: str) -> None:
+    """Make ``links/name`` a symbolic link to ``target`` (absolute), replacing a stale one atomically."""
+    path = os.path.join(links, name)
+    try:
+        if os.readlink(path) == target:
+            return
+    except OSError:
+        pass
+    tmp = f"{path}.{os.getpid()}.{threading.get_ident()}.tmp"     # one per thread of a gthread worker
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(tmp)
+    os.symlink(target, tmp)
+    os.replace(tmp, path)
+
+
+def signed_url(config: dict, root: str, sid: str, index: int, slot: int, file: str,
+               now: float | None = None) -> str:
+    """The signed URL of a page slot whose stimulus is ``file`` (relative to the manifest's folder ``root``);
+    its link is made in ``config["MEDIA_LINKS"]`` first."""
+    ext = os.path.splitext(file)[1].lower()
+    name = link_key(config["SECRET_KEY"], sid, index, slot) + ext
+    ensure_link(config["MEDIA_LINKS"], name, os.path.abspath(os.path.join(root, file)))
+    uri = f"/s/{sid}/media/{index}/{slot}/{name}"
+    expires = int(now if now is not None else time.time()) + int(config.get("MEDIA_LINK_SECONDS") or 3600)
+    return f"{uri}?md5={sign(uri, expires, config['MEDIA_LINK_SECRET'])}&expires={expires}"
+
+
+def video_url(study, kind, spec: dict, sid: str, index: int, slot: int) -> str:
+    """A page slot's media URL: the app's, or with ``MEDIA_SERVER = "nginx-signed"`` a stimulus file's signed
+    URL that nginx serves without the app (generated media, e.g. headphone-check sounds, stays the app's)."""
+    if current_app.config.get("MEDIA_SERVER") == "nginx-signed":
+        media = kind.media(study, spec, slot)
+        if media.body is None and media.file in study.manifest.by_file():
+            return signed_url(current_app.config, str(study.manifest.root), sid, index, slot, media.file)
+    return url_for("media.video", sid=sid, index=index, slot=slot)
