@@ -221,3 +221,28 @@ def test_the_help_states_the_declared_default(name):
 def test_gesture2vec_is_stochastic_only_with_retrieval_or_a_temperature():
     assert [_configured("gesture2vec", **c).stochastic for c in ({}, {"decoding": "retrieval"},
                                                                  {"temperature": "0.5"})] == [False, True, True]
+
+
+def test_the_stage_settings_take_their_defaults_from_the_declared_options():
+    from evalsuite.generators.ferstl_mogan import options as mogan_options
+    from evalsuite.generators.ferstl_mogan.training import MoganStages
+    from evalsuite.generators.gesticulator.options import OPTIONS as GESTICULATOR
+    from evalsuite.generators.gesticulator.training import PREDICTED_FRAMES, TrainSchedule, budgeted_schedule
+    from evalsuite.generators.gesture2vec.options import OPTIONS as G2V
+    from evalsuite.generators.gesture2vec.training import G2VStages
+
+    d = GESTICULATOR.defaults()
+    assert TrainSchedule() == budgeted_schedule(d["epochs"])
+    assert (TrainSchedule().epochs, TrainSchedule().batch_size, TrainSchedule().learning_rate,
+            TrainSchedule().lr_schedule) == (d["epochs"], d["batch_size"], d["learning_rate"], d["lr_schedule"])
+    assert TrainSchedule().sequence == d["past"] + PREDICTED_FRAMES + d["future"]
+    g2v, stages = G2V.defaults(), G2VStages()
+    for name in ("dae_epochs", "vq_epochs", "vq_decoder_epochs", "translation_epochs", "learning_rate",
+                 "batch_size", "reset_dead_codes", "scale_floor", "weakened_decoder"):
+        assert getattr(stages, name) == g2v[name], name
+    mogan, ms = mogan_options.OPTIONS.defaults(), MoganStages()
+    for name in ("classifier_epochs", "pretrain_epochs", "realism_pretrain_steps", "phase_pretrain_tries",
+                 "adversarial_steps", "batch_size", "learning_rate", "adversarial_learning_rate",
+                 "discriminator_learning_rate", "scale_floor"):
+        assert getattr(ms, name) == mogan[name], name
+    assert ms.discriminators == mogan_options.ABLATIONS[mogan["ablation"]]

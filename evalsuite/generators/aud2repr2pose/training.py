@@ -21,11 +21,11 @@ import numpy as np
 import torch
 from torch import nn
 
-from evalsuite.generators import checkpoints
 from evalsuite.generators.aud2repr2pose.net import MotionDAE, SpeechNet, SpeechNetConfig
 from evalsuite.generators.aud2repr2pose.systems import SYSTEMS
 from evalsuite.generators.datastream import Mapped, Rows, SegmentStore, Windows, mean_std
 from evalsuite.generators.early_stopping import BestWeights
+from evalsuite.generators.epoch_loop import EpochLoop
 from evalsuite.generators.scaling import floored_spread
 from evalsuite.generators.schedules import learning_rate_at
 from evalsuite.generators.weight_averaging import WeightAverage
@@ -111,10 +111,8 @@ def train_dae(poses: SegmentStore, code_dim: int, *, epochs: int = 20, batch_siz
         dae.feature_std.copy_(torch.from_numpy(poses.data).std(0).clamp_min(1e-6))
     poses.release()
     opt = torch.optim.Adam(dae.parameters(), lr=learning_rate)
-    ck = checkpoints.current()
-    state = {"dae": dae, "opt": opt, "rng": rng}
-    first, done = ck.start("autoencoder", state)
-    for epoch in range(first, first if done else epochs):
+    loop = EpochLoop("autoencoder", epochs, {"dae": dae, "opt": opt, "rng": rng}, on_epoch=on_epoch)
+    for epoch in loop:
         dae.train()
         total = 0.0
         for idx in _epochs(len(x), batch_size, rng):
@@ -124,9 +122,7 @@ def train_dae(poses: SegmentStore, code_dim: int, *, epochs: int = 20, batch_siz
             loss.backward()
             opt.step()
             total += loss.item() * len(idx)
-        if on_epoch is not None:
-            on_epoch({"stage": "autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)})
-        ck.step("autoencoder", epoch + 1, state, done=epoch + 1 == epochs)
+        loop.end({"stage": "autoencoder", "epoch": epoch + 1, "train_loss": total / len(x)})
     dae.eval()
     return dae
 
@@ -263,10 +259,10 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             return float(nn.functional.mse_loss(judged(val[0]), val[1]))
         err = [_decoded(judged, dae, x) - y for x, y in whole]
         return float(sum(float((e ** 2).sum()) for e in err) / sum(e.numel() for e in err))
-    ck = checkpoints.current()  # resumable: everything the next epoch depends on
-    state = {"net": net, "opt": opt, "average": averaged, "best": best, "history": history, "rng": rng}
-    first, done = ck.start("speech", state)
-    for epoch in range(first, first if done else epochs):
+    state = {"net": net, "opt": opt, "average": averaged, "best": best, "rng": rng}
+    loop = EpochLoop("speech", epochs, state, history=history, on_epoch=on_epoch, best=best,
+                     budget_seconds=budget_seconds, started=start)
+    for epoch in loop:
         for group in opt.param_groups:
             group["lr"] = learning_rate_at(lr_schedule, learning_rate, epoch, epochs)
         net.train()
@@ -281,19 +277,10 @@ def train_system(system: str, speech: Sequence[np.ndarray], poses: Sequence[np.n
             opt.step()
             averaged.update(net)
             total += loss.item() * len(idx)
-        record = {"stage": "speech", "epoch": epoch + 1, "train_loss": total / len(train_pairs),
-                  "seconds": time.perf_counter() - start}
+        record = {"stage": "speech", "epoch": epoch + 1, "train_loss": total / len(train_pairs)}
         if len(val_speech):
             record["val_loss"] = validation_loss()
-        history.append(record)
-        stop = best.update(record)
-        if on_epoch is not None:
-            on_epoch(record)
-        if not stop and budget_seconds is not None and time.perf_counter() - start > budget_seconds:
-            record["stopped"] = "time budget spent"
-            stop = True
-        ck.step("speech", epoch + 1, state, done=stop or epoch + 1 == epochs)
-        if stop:
+        if loop.end(record):
             break
     best.restore()
     judged.eval()

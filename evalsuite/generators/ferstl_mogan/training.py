@@ -16,7 +16,7 @@ steps.
 With ``budget_seconds`` each stage must end by a cumulative share of the budget (``MoganStages.budget_shares``:
 classifier 15 %, MSE pre-training to 45 %, discriminator pre-training to 55 %, adversarial training to 100 %; time
 a stage leaves unused goes to the later ones); a stage at its deadline stops, the next starts, and its last history
-row says ``"stopped": "time budget"`` (names in ``TrainedMogan.stopped``). The training split is memory-mapped
+row says ``"stopped": "time budget spent"`` (names in ``TrainedMogan.stopped``). The training split is memory-mapped
 (:mod:`evalsuite.generators.datastream`), so that memory does not grow with hours of corpus.
 """
 from __future__ import annotations
@@ -32,8 +32,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from evalsuite.generators import checkpoints
 from evalsuite.generators.datastream import SegmentStore, mean_std
+from evalsuite.generators.epoch_loop import BUDGET_SPENT, EpochLoop
 from evalsuite.generators.ferstl_mogan.data import Sequences, sequences
 from evalsuite.generators.ferstl_mogan.net import (
     Generator,
@@ -42,32 +42,34 @@ from evalsuite.generators.ferstl_mogan.net import (
     PhaseClassifier,
     SequenceDiscriminator,
 )
+from evalsuite.generators.ferstl_mogan.options import ABLATIONS, OPTIONS
 from evalsuite.generators.scaling import floored_spread
 
 __all__ = ["MoganStages", "TrainedMogan", "train_mogan", "generate_mogan", "weighted_f1", "WEIGHTS"]
 
 WEIGHTS = {"phase": 2.0, "realism": 4.0, "minibatch": 4.0, "displacement": 1.0}  # eq. (3)
+_D = OPTIONS.defaults()   # each option's default declared once, in options.py (the cpu-small preset)
 
 
 @dataclass(frozen=True)
 class MoganStages:
-    classifier_epochs: int = 30
-    pretrain_epochs: int = 30
+    """Lengths and rates: the plug-in's options (their declared defaults; ``discriminator_learning_rate`` None: the
+    generator's), and the paper's structure (``budget_shares``: cumulative deadlines of the four stages)."""
+
+    classifier_epochs: int = _D["classifier_epochs"]
+    pretrain_epochs: int = _D["pretrain_epochs"]
     snapshots: int = 6
-    realism_pretrain_steps: int = 100
-    phase_pretrain_tries: int = 40    # batches per generator snapshot at most, if never 3 right in a row
-    adversarial_steps: int = 1000
-    batch_size: int = 32
-    learning_rate: float = 1e-3
-    adversarial_learning_rate: float = 1e-4
-    # RMSprop rate of the discriminators in adversarial training (None: adversarial_learning_rate; the paper gives no
-    # rates). At the generator's rate they won within 100 steps (displacement accuracy 97-100 %) and the motion
-    # shrank below the MSE-only model's (div_k 1.3 against 2.9, natural 10.3).
-    discriminator_learning_rate: float | None = None
+    realism_pretrain_steps: int = _D["realism_pretrain_steps"]
+    phase_pretrain_tries: int = _D["phase_pretrain_tries"]  # batches per snapshot at most, if never 3 right in a row
+    adversarial_steps: int = _D["adversarial_steps"]
+    batch_size: int = _D["batch_size"]
+    learning_rate: float = _D["learning_rate"]
+    adversarial_learning_rate: float = _D["adversarial_learning_rate"]
+    discriminator_learning_rate: float | None = _D["discriminator_learning_rate"]
     discontinuity_weight: float = 1.0
-    scale_floor: float = 0.0           # a position's std is at least this fraction of the widest one's
-    discriminators: tuple[str, ...] = ("phase", "realism", "minibatch", "displacement")  # ablations drop some
-    budget_shares: tuple[float, ...] = (0.15, 0.45, 0.55, 1.0)   # cumulative deadlines of the stages
+    scale_floor: float = _D["scale_floor"]   # a position's std is at least this fraction of the widest one's
+    discriminators: tuple[str, ...] = ABLATIONS[_D["ablation"]]   # ablations drop some
+    budget_shares: tuple[float, ...] = (0.15, 0.45, 0.55, 1.0)
 
 
 @dataclass
@@ -127,12 +129,19 @@ def _train(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases
     stopped: list[str] = []
     t0 = time.perf_counter()
 
-    def late(stage: int, name: str) -> bool:
-        if budget_seconds is None or time.perf_counter() - t0 < budget_seconds * stages.budget_shares[stage]:
+    def deadline(k: int) -> float | None:   # the cumulative share k of the budget, in seconds after t0
+        return None if budget_seconds is None else budget_seconds * stages.budget_shares[k]
+
+    def stage_loop(name: str, k: int, epochs: int, state: dict) -> EpochLoop:   # resumable stage k
+        return EpochLoop(name, epochs, state, history=history, on_epoch=on_step, budget_seconds=deadline(k),
+                         started=t0, stopped=stopped)
+
+    def late(stage: int, name: str) -> bool:   # the discriminators' pre-training (not resumable: re-run)
+        if (limit := deadline(stage)) is None or time.perf_counter() - t0 < limit:
             return False
         if name not in stopped:
             stopped.append(name)
-            log({"stage": name, "stopped": "time budget"})
+            log({"stage": name, "stopped": BUDGET_SPENT})
         return True
 
     def log(record: dict) -> None:
@@ -164,10 +173,8 @@ def _train(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases
     # (1) phase classifier on real motion
     clf = PhaseClassifier(config)
     opt = torch.optim.Adam(clf.parameters(), lr=stages.learning_rate)
-    ck = checkpoints.current()  # resumable: everything each stage's next epoch (step) depends on
-    state: dict = {"classifier": clf, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
-    first, done = ck.start("phase classifier", state)
-    for epoch in range(first, first if done else stages.classifier_epochs):
+    loop = stage_loop("phase classifier", 0, stages.classifier_epochs, {"classifier": clf, "opt": opt, "rng": rng})
+    for epoch in loop:
         clf.train()
         for idx in torch.from_numpy(rng.permutation(n)).split(stages.batch_size):
             logits = clf(_classifier_input(Y[idx], X[idx][..., -1], arm))
@@ -175,10 +182,7 @@ def _train(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases
             opt.zero_grad()
             loss.backward()
             opt.step()
-        log({"stage": "phase classifier", "epoch": epoch + 1, "train_loss": loss.item()})
-        cut = late(0, "phase classifier")
-        ck.step("phase classifier", epoch + 1, state, done=cut or epoch + 1 == stages.classifier_epochs)
-        if cut:
+        if loop.end({"stage": "phase classifier", "epoch": epoch + 1, "train_loss": loss.item()}):
             break
     clf.eval()
     for p in clf.parameters():
@@ -214,22 +218,20 @@ def _train(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases
     opt = torch.optim.Adam(gen.parameters(), lr=stages.learning_rate)
     snapshots = [copy.deepcopy(gen.state_dict())]
     every = max(1, stages.pretrain_epochs // stages.snapshots)
-    state = {"generator": gen, "opt": opt, "rng": rng, "history": history, "stopped": stopped,
-             "snapshots": snapshots}
-    first, done = ck.start("generator MSE pre-training", state)
-    for epoch in range(first, first if done else stages.pretrain_epochs):
+    loop = stage_loop("generator MSE pre-training", 1, stages.pretrain_epochs,
+                      {"generator": gen, "opt": opt, "rng": rng, "snapshots": snapshots})
+    for epoch in loop:
         gen.train()
         for idx in torch.from_numpy(rng.permutation(n)).split(stages.batch_size):
             loss = nn.functional.mse_loss(gen(X[idx], noise(len(idx), config.sequence)), Y[idx])
             opt.zero_grad()
             loss.backward()
             opt.step()
-        cut = late(1, "generator MSE pre-training")
+        cut = loop.out_of_time()
         if (epoch + 1) % every == 0 or cut:
             snapshots.append(copy.deepcopy(gen.state_dict()))
-        log({"stage": "generator MSE pre-training", "epoch": epoch + 1, "train_loss": loss.item(), **val_mse(gen)})
-        ck.step("generator MSE pre-training", epoch + 1, state, done=cut or epoch + 1 == stages.pretrain_epochs)
-        if cut:
+        if loop.end({"stage": "generator MSE pre-training", "epoch": epoch + 1, "train_loss": loss.item(),
+                     **val_mse(gen)}, late=cut):
             break
     if "mse_only" in stages.discriminators or not stages.discriminators:
         gen.eval()
@@ -307,12 +309,10 @@ def _train(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases
     g_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
     mse_opt = torch.optim.RMSprop(gen.parameters(), lr=stages.adversarial_learning_rate)
     total_w = sum(WEIGHTS[k] for k in active)
-    state = {"generator": gen, "g_opt": g_opt, "mse_opt": mse_opt, "rng": rng, "history": history, "stopped": stopped,
+    state = {"generator": gen, "g_opt": g_opt, "mse_opt": mse_opt, "rng": rng,
              **{f"d_{k}": discs[k] for k in active}, **{f"d_{k}_opt": d_opts[k] for k in active}}
-    first, done = ck.start("adversarial", state)  # the discriminators' pre-training is re-run, then overwritten
-    for step in range(first, first if done else stages.adversarial_steps):
-        if late(3, "adversarial"):
-            break
+    loop = stage_loop("adversarial", 3, stages.adversarial_steps, state)  # resumed: discriminators re-pretrained, then loaded
+    for step in loop:
         gen.train()
         idx = batches(stages.batch_size)
         fake = gen(X[idx], noise(len(idx), config.sequence))
@@ -332,10 +332,10 @@ def _train(speech: Sequence[np.ndarray], positions: Sequence[np.ndarray], phases
             mse_opt.zero_grad()
             mse.backward()
             mse_opt.step()
-        if step % 50 == 0 or step == stages.adversarial_steps - 1:
-            log({"stage": "adversarial", "step": step + 1, "generator_loss": g_loss.item(),
-                 **{f"d_{k}_accuracy": v for k, v in accs.items()}})
-        ck.step("adversarial", step + 1, state, done=step + 1 == stages.adversarial_steps)
+        if loop.end({"stage": "adversarial", "step": step + 1, "generator_loss": g_loss.item(),
+                     **{f"d_{k}_accuracy": v for k, v in accs.items()}},
+                    log=step % 50 == 0 or step == stages.adversarial_steps - 1):
+            break
     gen.eval()
     return TrainedMogan(config, gen, clf, smean, sstd, pmean, pstd, np.asarray(arm_columns), f1, history, stopped)
 

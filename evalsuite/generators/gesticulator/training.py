@@ -8,14 +8,14 @@ loss = MSE(pose) + 0.6 MSE(velocity) on the 40 predicted frames; Adam, learning 
 the first 7 epochs without autoregression (the previous-pose input is zeroed), then autoregression with
 teacher forcing that is withdrawn: the model's own predictions replace the ground truth for two
 consecutive frames every 16 frames, then every 8, every 4, and finally always. Stage lengths are options
-(``TrainSchedule``) so that a CPU budget can keep the order of the stages with fewer epochs.
+(``TrainSchedule``, its defaults the declared options') so that a CPU budget can keep the order of the stages
+with fewer epochs.
 """
 from __future__ import annotations
 
 import math
 import pathlib
 import tempfile
-import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
@@ -23,10 +23,11 @@ import numpy as np
 import torch
 from torch import nn
 
-from evalsuite.generators import checkpoints
 from evalsuite.generators.datastream import SegmentStore, Windows, mean_std
 from evalsuite.generators.early_stopping import BestWeights
+from evalsuite.generators.epoch_loop import EpochLoop
 from evalsuite.generators.gesticulator.net import GesticulatorConfig, GesticulatorNet
+from evalsuite.generators.gesticulator.options import OPTIONS
 from evalsuite.generators.scaling import floored_spread
 from evalsuite.generators.schedules import learning_rate_at
 from evalsuite.generators.weight_averaging import WeightAverage
@@ -38,19 +39,27 @@ velocity_weight = 0.6  # alpha of the paper's loss (2)
 PREDICTED_FRAMES = 40  # frames predicted per training sequence, between its past and future context
 
 
+_D = OPTIONS.defaults()   # each option's default declared once, in options.py (the cpu-small preset)
+
+
+def _pretrain_epochs(epochs: int) -> int:
+    return max(1, math.ceil(0.07 * epochs))
+
+
 @dataclass(frozen=True)
 class TrainSchedule:
     """Epochs per stage, in the paper's order. ``teacher_periods`` are the successive periods (in frames) at
-    which the model's own prediction replaces the ground truth; 1 = always its own prediction."""
+    which the model's own prediction replaces the ground truth; 1 = always its own prediction. The defaults are
+    the declared options' (:func:`budgeted_schedule` of the default ``epochs``)."""
 
-    pretrain_epochs: int = 7
+    pretrain_epochs: int = _pretrain_epochs(_D["epochs"])
     teacher_periods: tuple[int, ...] = (16, 8, 4)
-    free_epochs: int = 85        # autoregressive epochs without teacher forcing (95 epochs in all with the defaults)
-    batch_size: int = 64
-    learning_rate: float = 1e-4
-    sequence: int = 10 + PREDICTED_FRAMES + 20   # frames per training sequence: past + predicted + future
+    free_epochs: int = _D["epochs"] - _pretrain_epochs(_D["epochs"]) - 3   # autoregressive, no teacher forcing
+    batch_size: int = _D["batch_size"]
+    learning_rate: float = _D["learning_rate"]
+    sequence: int = _D["past"] + PREDICTED_FRAMES + _D["future"]   # frames per training sequence
     stride: int = 10             # between training sequences (4x overlap of the predicted frames)
-    lr_schedule: str = "constant"  # or "cosine": decays to 1 % of learning_rate over the epochs (a deviation)
+    lr_schedule: str = _D["lr_schedule"]   # "cosine": decays to 1 % of learning_rate over the epochs; "constant"
 
     def learning_rate_at(self, epoch: int) -> float:
         """Learning rate of a zero-based epoch: constant (the paper's) or a cosine decay to 1 % by the last epoch."""
@@ -213,11 +222,10 @@ def _train(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], config: Ge
     history: list[dict] = []
     averaged = WeightAverage(net, ema)
     best = BestWeights(averaged.module, patience)
-    ck = checkpoints.current()  # resumable: everything the next epoch depends on
-    state = {"net": net, "opt": opt, "average": averaged, "best": best, "history": history, "rng": rng}
-    first, done = ck.start("gesticulator", state)
-    start = time.perf_counter()
-    for epoch in range(first, first if done else schedule.epochs):
+    state = {"net": net, "opt": opt, "average": averaged, "best": best, "rng": rng}
+    loop = EpochLoop("gesticulator", schedule.epochs, state, history=history, on_epoch=on_epoch, best=best,
+                     budget_seconds=budget_seconds)
+    for epoch in loop:
         autoregressive, period = schedule.stage(epoch)
         for group in opt.param_groups:
             group["lr"] = schedule.learning_rate_at(epoch)
@@ -236,23 +244,14 @@ def _train(speech: Sequence[np.ndarray], poses: Sequence[np.ndarray], config: Ge
             total += loss.item() * len(idx)
             n += len(idx)
         record = {"epoch": epoch + 1, "stage": "pretrain" if not autoregressive else
-                  ("autoregressive" if period == 1 else f"teacher forcing 1/{period}"),
-                  "train_loss": total / n, "seconds": time.perf_counter() - start}
+                  ("autoregressive" if period == 1 else f"teacher forcing 1/{period}"), "train_loss": total / n}
         if val is not None:
             averaged.module.eval()
             with torch.no_grad():
                 vpred = _rollout(averaged.module, val[0], val[1], config.autoregressive, 1)
                 record["val_loss"] = float(_loss(vpred, val[1][:, config.past:schedule.sequence - config.future],
                                                  velocity_weight))
-        history.append(record)
-        stop = best.update(record)
-        if on_epoch is not None:
-            on_epoch(record)
-        if not stop and budget_seconds is not None and time.perf_counter() - start > budget_seconds:
-            record["stopped"] = "time budget spent"
-            stop = True
-        ck.step("gesticulator", epoch + 1, state, done=stop or epoch + 1 == schedule.epochs)
-        if stop:
+        if loop.end(record):
             break
     best.restore()
     net = averaged.module
@@ -293,5 +292,5 @@ def budgeted_schedule(epochs: int) -> TrainSchedule:
     teacher-forcing period, the rest autoregressive without teacher forcing."""
     if epochs < 5:
         raise ValueError("the schedule needs at least 5 epochs (pretraining, 3 teacher-forcing stages, free)")
-    pretrain = max(1, math.ceil(0.07 * epochs))
+    pretrain = _pretrain_epochs(epochs)
     return TrainSchedule(pretrain_epochs=pretrain, free_epochs=epochs - pretrain - 3)

@@ -7,7 +7,7 @@ decoder alone, with the rest frozen: the paper's "weakened decoder" schedule), a
 With ``budget_seconds`` each stage must end by a cumulative share of the budget (``G2VStages.budget_shares``:
 10 % frame autoencoder, 45 % VQ-DVAE, 45 % translation; time a stage leaves unused goes to the later ones): a
 stage that reaches its deadline stops after the current epoch, the next stage starts, and the history row says
-``"stopped": "time budget"``. With validation data each epoch also reports ``val_loss`` (the stage's loss on
+``"stopped": "time budget spent"``. With validation data each epoch also reports ``val_loss`` (the stage's loss on
 the validation segments, no noise and no dropout).
 """
 from __future__ import annotations
@@ -23,8 +23,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from evalsuite.generators import checkpoints
 from evalsuite.generators.datastream import Rows, SegmentStore, Windows, max_abs_deviation, mean_std, training_folder
+from evalsuite.generators.epoch_loop import EpochLoop
 from evalsuite.generators.gesture2vec.data import (
     WordTrack,
     _aligned,
@@ -34,25 +34,32 @@ from evalsuite.generators.gesture2vec.data import (
     _window_words,
 )
 from evalsuite.generators.gesture2vec.net import VQDVAE, FrameDAE, G2VConfig, Translator
+from evalsuite.generators.gesture2vec.options import OPTIONS
 from evalsuite.generators.scaling import floored_spread
 
 __all__ = ["G2VStages", "TrainedG2V", "train_gesture2vec", "generate_gesture2vec", "code_perplexity",
            "WordTrack", "latent_windows"]
 
 
+_D = OPTIONS.defaults()   # each option's default declared once, in options.py (the cpu-small preset)
+
+
 @dataclass(frozen=True)
 class G2VStages:
-    dae_epochs: int = 20
-    vq_epochs: int = 20
-    vq_decoder_epochs: int = 20
-    translation_epochs: int = 250
-    learning_rate: float = 1e-3
-    translation_learning_rate: float = 1e-3
-    batch_size: int = 128
-    reset_dead_codes: bool = True        # codes unused in a VQ epoch restart at a random chunk's encoding
-    scale_floor: float = 0.0             # a dimension's range is at least this fraction of the widest one's
+    """The stages' lengths and rates: the plug-in's options (their declared defaults; the translation stage's rate
+    is ``learning_rate`` unless given), and ``budget_shares`` of the three stages."""
+
+    dae_epochs: int = _D["dae_epochs"]
+    vq_epochs: int = _D["vq_epochs"]
+    vq_decoder_epochs: int = _D["vq_decoder_epochs"]
+    translation_epochs: int = _D["translation_epochs"]
+    learning_rate: float = _D["learning_rate"]
+    translation_learning_rate: float = _D["learning_rate"]
+    batch_size: int = _D["batch_size"]
+    reset_dead_codes: bool = _D["reset_dead_codes"]   # codes unused in a VQ epoch restart at a random chunk's encoding
+    scale_floor: float = _D["scale_floor"]            # a dimension's range is at least this fraction of the widest one's
     budget_shares: tuple[float, float, float] = (0.10, 0.45, 0.45)
-    weakened_decoder: bool = False       # the paper's §4.3: the decoder frozen in the first VQ-DVAE stage
+    weakened_decoder: bool = _D["weakened_decoder"]   # the paper's §4.3: the decoder frozen in the first VQ-DVAE stage
 
 
 @dataclass
@@ -103,18 +110,11 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     start_time = time.perf_counter()
     shares = np.cumsum(stages.budget_shares) / sum(stages.budget_shares)
 
-    def log(record: dict) -> None:
-        record["seconds"] = time.perf_counter() - start_time
-        history.append(record)
-        if on_epoch is not None:
-            on_epoch(record)
-
-    def out_of_time(stage: int, record: dict, name: str) -> bool:
-        if budget_seconds is None or time.perf_counter() - start_time < budget_seconds * shares[stage]:
-            return False
-        record["stopped"] = "time budget"
-        stopped.append(name)
-        return True
+    def stage_loop(name: str, k: int, epochs: int, state: dict) -> EpochLoop:
+        """Stage ``k``'s loop: its deadline is the cumulative share ``k`` of the budget."""
+        deadline = None if budget_seconds is None else budget_seconds * shares[k]
+        return EpochLoop(name, epochs, state, history=history, on_epoch=on_epoch, budget_seconds=deadline,
+                         started=start_time, stopped=stopped)
 
     mean = mean_std(poses)[0]   # one segment at a time, the concatenation's figures bit for bit
     # mean 0, max |x| 1 (paper §4.1), but a rotation-matrix entry that hardly moves (idle sway) is not stretched
@@ -127,10 +127,9 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     x = Rows(norm)
     vx = torch.from_numpy(np.concatenate(vnorm)) if vnorm else None
     opt = torch.optim.Adam(dae.parameters(), lr=stages.learning_rate)
-    ck = checkpoints.current()  # resumable: everything each stage's next epoch depends on
-    state: dict = {"dae": dae, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
-    first, done = ck.start("frame autoencoder", state)
-    for epoch in range(first, first if done else stages.dae_epochs):
+    # resumable: each state holds everything its stage's next epoch depends on
+    loop = stage_loop("frame autoencoder", 0, stages.dae_epochs, {"dae": dae, "opt": opt, "rng": rng})
+    for epoch in loop:
         dae.train()
         total = 0.0
         for idx in _batches(len(x), stages.batch_size, rng):
@@ -145,10 +144,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             dae.eval()
             with torch.no_grad():
                 rec["val_loss"] = nn.functional.mse_loss(dae(vx), vx).item()
-        stop = out_of_time(0, rec, "frame autoencoder")
-        log(rec)
-        ck.step("frame autoencoder", epoch + 1, state, done=stop or epoch + 1 == stages.dae_epochs)
-        if stop:
+        if loop.end(rec):
             break
     dae.eval()
     with torch.no_grad():
@@ -177,9 +173,8 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     opt = torch.optim.Adam([p for p in vq.parameters() if p.requires_grad], lr=stages.learning_rate)
     decoder_opt = torch.optim.Adam(decoder, lr=stages.learning_rate)
     total_vq = stages.vq_epochs + stages.vq_decoder_epochs
-    state = {"vq": vq, "opt": opt, "decoder_opt": decoder_opt, "rng": rng, "history": history, "stopped": stopped}
-    epoch, done = ck.start("vq-dvae", state)
-    while not done and epoch < total_vq:
+    loop = stage_loop("vq-dvae", 1, total_vq, {"vq": vq, "opt": opt, "decoder_opt": decoder_opt, "rng": rng})
+    for epoch in loop:
         decoder_only = epoch >= stages.vq_epochs
         if decoder_only and opt is not decoder_opt:  # the decoder alone from here on (also when resumed here)
             for p in [*vq.encoder.parameters(), *vq.codebook.parameters()]:
@@ -212,12 +207,9 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
             with torch.no_grad():
                 recon, _, vq_loss = vq(vct)
                 rec["val_loss"] = (nn.functional.mse_loss(recon, vct) + (0 if decoder_only else vq_loss)).item()
-        if out_of_time(1, rec, stage):
-            # out of time: a cut encoder stage still gets one decoder epoch (the decoder must fit the codes)
-            epoch = stages.vq_epochs - 1 if not decoder_only and stages.vq_decoder_epochs else total_vq
-        log(rec)
-        epoch += 1
-        ck.step("vq-dvae", epoch, state, done=epoch >= total_vq)
+        # out of time: a cut encoder stage still gets one decoder epoch (the decoder must fit the codes)
+        if loop.end(rec, budget_next=stages.vq_epochs if not decoder_only and stages.vq_decoder_epochs else None):
+            break
     vq.eval()
     # 3. translation: word windows (one every `stride` frames) -> codes of each window's non-overlapping chunks
     train_chunks: dict[int, Sequence[np.ndarray]] = {}
@@ -230,9 +222,8 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
     opt = torch.optim.Adam(translator.parameters(), lr=stages.translation_learning_rate)
     targets = torch.from_numpy(tgts.astype(np.int64))
     ce = nn.functional.cross_entropy
-    state = {"translator": translator, "opt": opt, "rng": rng, "history": history, "stopped": stopped}
-    first, done = ck.start("translation", state)
-    for epoch in range(first, first if done else stages.translation_epochs):
+    loop = stage_loop("translation", 2, stages.translation_epochs, {"translator": translator, "opt": opt, "rng": rng})
+    for epoch in loop:
         translator.train()
         total = 0.0
         for idx in _batches(len(srcs), stages.batch_size, rng):
@@ -252,10 +243,7 @@ def train_gesture2vec(poses: Sequence[np.ndarray], words: Sequence[WordTrack], c
                 logits = translator(wx, mask, vt, torch.from_numpy(np.stack(val_al)))
                 rec["val_loss"] = ce(logits.reshape(-1, config.codebook), vt.reshape(-1)).item()
                 rec["val_code_error"] = float((logits.argmax(-1) != vt).float().mean())
-        stop = out_of_time(2, rec, "translation")
-        log(rec)
-        ck.step("translation", epoch + 1, state, done=stop or epoch + 1 == stages.translation_epochs)
-        if stop:
+        if loop.end(rec):
             break
     translator.eval()
     model = TrainedG2V(config, fps, dae, vq, translator, mean, scale, code_counts, history, train_chunks, stopped)
