@@ -2,8 +2,9 @@
 answer lost or duplicated.
 
 Starts the app under gunicorn (deploy/gunicorn.conf.py; several worker processes, loopback only) behind
-Debian's nginx with the shipped site file (deploy/nginx/evalsuite.conf.template; videos sent by nginx after
-the app authorised them, EVALSUITE_MEDIA_SERVER=nginx), on SQLite and on a throwaway PostgreSQL cluster, and
+Debian's nginx with the shipped site file (deploy/nginx/evalsuite.conf.template; videos served by nginx from
+the page's signed URLs without an application request, EVALSUITE_MEDIA_SERVER=nginx-signed, or with
+--media-server nginx after the app authorised each), on SQLite and on a throwaway PostgreSQL cluster, and
 lets N simulated participants (threads, each with its own cookie jar, like separate browsers) complete the
 study: they arrive spread over --ramp seconds, enter from Prolific, GET every page and its videos, think
 (uniform --think-min..--think-max seconds, watching and deciding) and POST every answer with its interaction
@@ -243,14 +244,16 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
     media_log = os.path.join(os.path.dirname(study), f"media-{secrets.token_hex(4)}.log")
     env = {"EVALSUITE_STUDY": study, "EVALSUITE_DATABASE_URL": db_url, "EVALSUITE_SECRET_KEY": SECRET,
            "EVALSUITE_ADMIN_TOKEN": ADMIN, "EVALSUITE_TRUSTED_PROXIES": "1",
-           "EVALSUITE_MEDIA_SERVER": "nginx", "EVALSUITE_MEDIA_ACCESS_LOG": media_log}
+           "EVALSUITE_MEDIA_SERVER": args.media_server, "EVALSUITE_MEDIA_ACCESS_LOG": media_log,
+           "EVALSUITE_MEDIA_LINKS": media_log + ".links", "EVALSUITE_MEDIA_LINK_SECRET": SECRET + "-links"}
     timing_log = os.path.join(os.path.dirname(study), f"timing-{secrets.token_hex(4)}.log") if args.timing else None
     if timing_log:
         env[TIMING_ENV] = timing_log
     if args.no_write_queue:
         env["EVALSUITE_SQLITE_WRITE_QUEUE"] = "0"
     server = Gunicorn(env, args.workers, args.threads)
-    nginx = Nginx(f"127.0.0.1:{server.port}", stim, media_log, workers=args.nginx_workers)
+    nginx = Nginx(f"127.0.0.1:{server.port}", stim, media_log, workers=args.nginx_workers,
+                  links=media_log + ".links", link_secret=SECRET + "-links")
     server.start()
     nginx.start()
     warm_up(nginx.url, 4 * args.workers)
@@ -421,6 +424,9 @@ def main():
     ap.add_argument("--kill-after", type=float, default=0.5,
                     help="crash run: SIGKILL once this share of the answers is acknowledged")
     ap.add_argument("--no-kill", action="store_true", help="skip the SIGKILL runs")
+    ap.add_argument("--media-server", default="nginx-signed", choices=("nginx", "nginx-signed"),
+                    help="nginx-signed (the default): nginx serves the page's signed video URLs without the app; "
+                         "nginx: the app authorises each video (X-Accel-Redirect)")
     ap.add_argument("--think-min", type=float, default=2.0, help="shortest think time per page, seconds")
     ap.add_argument("--think-max", type=float, default=10.0, help="longest think time per page, seconds")
     ap.add_argument("--timing", action="store_true",

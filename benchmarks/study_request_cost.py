@@ -1,10 +1,12 @@
 """CPU and SQL statements per request of the study server, in one process (no network, no gunicorn).
 
 N participants walk the load-test study of ``benchmarks/study_load.py`` (consent, 3 pairwise, 2 MUSHRA pages)
-one after another through the app's WSGI interface (Flask's test client), with the media server set to nginx
-(the app only authorises a video, nginx would send it). For each request kind (entry, page, answer, media
+one after another through the app's WSGI interface (Flask's test client), with the media server set to nginx-signed
+(the page signs the video URLs, nginx would serve them without the app; ``--media-server nginx``: the app
+authorises each video and nginx would send it). For each request kind (entry, page, answer, media
 authorisation) it prints the process CPU time per request (``time.process_time``) and the SQL statements per
-request (SQLAlchemy ``before_cursor_execute`` events), on SQLite (WAL, synchronous=FULL) and on PostgreSQL.
+request (SQLAlchemy ``before_cursor_execute`` events), and "per answer": an answer with its page and its video
+authorisations, on SQLite (WAL, synchronous=FULL) and on PostgreSQL.
 
     python benchmarks/study_request_cost.py                        # SQLite and a throwaway PostgreSQL
     python benchmarks/study_request_cost.py --databases sqlite --participants 50
@@ -62,6 +64,8 @@ def walk(app, pid, rng, cost):
             return answers
         data, csrf = form
         for video in data["videos"]:
+            if "?md5=" in video:
+                continue                      # a signed URL (nginx-signed): nginx sends it, the app is not asked
             v = timed("media", client.get, video)
             assert v.status_code == 200, v.status_code
         body = {"token": secrets.token_hex(12), "answer": choose_answer(rng, data), "events": playback_events(data)}
@@ -70,7 +74,7 @@ def walk(app, pid, rng, cost):
         answers += 1
 
 
-def measure(study, url, participants, secret):
+def measure(study, url, participants, secret, media_server="nginx-signed"):
     """{kind: (requests, CPU ms per request, statements per request)} for ``participants`` walks."""
     from sqlalchemy import event
 
@@ -78,7 +82,8 @@ def measure(study, url, participants, secret):
     from study_app.context import store_of
 
     app = create_app({"STUDY": study, "DATABASE_URL": url, "SECRET_KEY": secret, "ADMIN_TOKEN": secret,
-                      "SESSION_COOKIE_SECURE": False, "MEDIA_SERVER": "nginx",
+                      "SESSION_COOKIE_SECURE": False, "MEDIA_SERVER": media_server,
+                      "MEDIA_LINKS": os.path.join(os.path.dirname(study), "links"), "MEDIA_LINK_SECRET": secret,
                       "MEDIA_ACCESS_LOG": os.path.join(os.path.dirname(study), "media.log"),
                       "INSTANCE_PATH": os.path.join(os.path.dirname(study), "inst")})
     counter = [0]
@@ -111,6 +116,9 @@ def report(name, figures, base=None):
     if "page" in figures and "answer" in figures:
         figures = {**figures, "answer+page": (figures["answer"][0], figures["answer"][1] + figures["page"][1],
                                               figures["answer"][2] + figures["page"][2])}
+        n, media = figures["answer"][0], figures.get("media", (0, 0.0, 0.0))   # + its video authorisations
+        figures["per answer"] = (n, figures["answer+page"][1] + media[0] * media[1] / n,
+                                 figures["answer+page"][2] + media[0] * media[2] / n)
     for kind, (n, cpu, sql) in figures.items():
         ratio = ""
         if base and kind in base:
@@ -142,6 +150,9 @@ def main():
     ap.add_argument("--baseline", default=None,
                     help="also measure this git ref (e.g. HEAD~3) in a temporary worktree first and print each "
                          "figure's ratio to it")
+    ap.add_argument("--media-server", default="nginx-signed", choices=("nginx", "nginx-signed"),
+                    help="nginx: the app authorises each video (X-Accel-Redirect); nginx-signed (the default): the "
+                         "page signs the video URLs and nginx serves them without the app (a --baseline run: nginx)")
     ap.add_argument("--json", action="store_true", help="print the figures as one JSON line only (for --baseline)")
     args = ap.parse_args()
     base: dict = {}
@@ -174,12 +185,12 @@ def main():
             f"{os.cpu_count()} CPUs, load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
         dbs = [d.strip() for d in args.databases.split(",") if d.strip()]
         if "sqlite" in dbs:
-            out["sqlite"] = measure(study, f"sqlite:///{tmp}/cost.db", args.participants, secret)
+            out["sqlite"] = measure(study, f"sqlite:///{tmp}/cost.db", args.participants, secret, args.media_server)
         if args.database_url:
-            out["postgresql"] = measure(study, args.database_url, args.participants, secret)
+            out["postgresql"] = measure(study, args.database_url, args.participants, secret, args.media_server)
         elif "postgresql" in dbs:
             with throwaway_postgres(fsync=True) as server:
-                out["postgresql"] = measure(study, create_database(server, "cost"), args.participants, secret)
+                out["postgresql"] = measure(study, create_database(server, "cost"), args.participants, secret, args.media_server)
         if args.json:
             print(json.dumps(out))
             return

@@ -28,7 +28,7 @@ import time
 
 from flask import current_app, url_for
 
-__all__ = ["link_key", "sign", "signed_url", "ensure_link", "video_url"]
+__all__ = ["link_key", "sign", "signed_url", "ensure_link", "video_urls"]
 
 
 def link_key(secret_key: str, sid: str, index: int, slot: int) -> str:
@@ -69,11 +69,20 @@ def signed_url(config: dict, root: str, sid: str, index: int, slot: int, file: s
     return f"{uri}?md5={sign(uri, expires, config['MEDIA_LINK_SECRET'])}&expires={expires}"
 
 
-def video_url(study, kind, spec: dict, sid: str, index: int, slot: int) -> str:
-    """A page slot's media URL: the app's, or with ``MEDIA_SERVER = "nginx-signed"`` a stimulus file's signed
-    URL that nginx serves without the app (generated media, e.g. headphone-check sounds, stays the app's)."""
-    if current_app.config.get("MEDIA_SERVER") == "nginx-signed":
-        media = kind.media(study, spec, slot)
-        if media.body is None and media.file in study.manifest.by_file():
-            return signed_url(current_app.config, str(study.manifest.root), sid, index, slot, media.file)
-    return url_for("media.video", sid=sid, index=index, slot=slot)
+def video_urls(study, kind, spec: dict, sid: str, index: int) -> list[str]:
+    """A page's media URLs, one per slot: the app's, or with ``MEDIA_SERVER = "nginx-signed"`` a stimulus file's
+    signed URL that nginx serves without the app (generated media, e.g. headphone-check sounds, stays the
+    app's and is not generated here)."""
+    slots = range(kind.n_slots(spec))
+    urls = [url_for("media.video", sid=sid, index=index, slot=k) for k in slots]
+    if current_app.config.get("MEDIA_SERVER") != "nginx-signed":
+        return urls
+    files = None
+    for k in slots:
+        if kind.generated_seconds(spec, k) is not None:
+            continue                                  # generated media: the app's route
+        media = kind.media(study, spec, k)
+        files = study.manifest.by_file() if files is None else files
+        if media.body is None and media.file in files:
+            urls[k] = signed_url(current_app.config, str(study.manifest.root), sid, index, k, media.file)
+    return urls

@@ -18,7 +18,7 @@ from flask import Blueprint, abort, current_app, jsonify, redirect, render_templ
 from study_app.adaptive import assign_pair
 from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
-from study_app.media_signed import video_url
+from study_app.media_signed import video_urls
 from study_app.operations import decline_without_plan, mark_if_pilot
 from study_app.outcomes import code_for
 from study_app.pages import get_kind
@@ -207,7 +207,7 @@ def _page_data(study, spec, index, total, sid) -> dict:
             "min_width": study.min_width}
     kind = get_kind(spec["type"])
     data["done_word"] = kind.done_word
-    data["videos"] = [video_url(study, kind, spec, sid, index, k) for k in range(kind.n_slots(spec))]
+    data["videos"] = video_urls(study, kind, spec, sid, index)
     data.update(kind.page_data(study, spec, _page_cfg(study, spec)))
     return data
 
