@@ -26,6 +26,16 @@ def test_signature_is_nginx_secure_link_md5_and_keys_are_opaque():
     assert link_key(SECRET, "sid", 1, 0) != link_key("other", "sid", 1, 0)
 
 
+def test_parse_request_reads_only_answered_signed_urls():
+    key = "0123456789abcdef" * 2
+    signed = f"/s/AbCd/media/3/1/{key}.mp4?md5=x-_Y&expires=9"
+    assert parse_request(f'1700000000.5 206 100 {signed} "bytes 0-99/900" 100')[:3] == ("AbCd", 3, 1)
+    assert parse_request(f'1700000000.5 304 0 {signed} "-" -') is not None       # asked, nothing new sent
+    for line in (f'1700000000.5 403 153 {signed} "-" 153', f'1700000000.5 410 153 {signed} "-" 153',
+                 '1700000000.5 206 100 /s/AbCd/media/3/1 "bytes 0-99/900" 100'):   # the app recorded this one
+        assert parse_request(line) is None, line
+
+
 def test_signed_mode_needs_links_and_secret(tmp_path):
     from test_study_media_nginx import _app
     with pytest.raises(StudyStateError, match="MEDIA_LINKS"):
