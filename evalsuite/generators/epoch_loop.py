@@ -11,9 +11,9 @@ adversarial steps) trains as::
         if loop.end(record):
             break
 
-:meth:`EpochLoop.end` does, in this order: ``record["seconds"]`` (since ``started``), the history row, early stopping
-(:class:`~evalsuite.generators.early_stopping.BestWeights`), the budget check (``record["stopped"] = "time budget
-spent"``, the record's stage added to ``stopped``), the progress callback, and the checkpoint step
+:meth:`EpochLoop.end` does, in this order: early stopping (:class:`~evalsuite.generators.early_stopping.BestWeights`),
+the budget check (``record["stopped"] = "time budget spent"``, the record's stage added to ``stopped``),
+``record["seconds"]`` (since ``started``), the history row, the progress callback, and the checkpoint step
 (:mod:`evalsuite.generators.checkpoints`; always at the stage's end). Nothing in it draws random numbers, so the
 weights are those of the loops it replaced. A stage with a cumulative budget share passes its deadline as
 ``budget_seconds`` (seconds after ``started``, the training's start).
