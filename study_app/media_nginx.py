@@ -74,8 +74,7 @@ def parse_line(line: str) -> tuple[str, int, int, int, int, int, int, dt.datetim
         last = min(int(sent), total) - 1
     else:
         return None
-    when = dt.datetime.fromtimestamp(float(msec), dt.timezone.utc).replace(tzinfo=None)
-    return u.group(1), int(u.group(2)), int(u.group(3)), first, last, total, int(status), when
+    return u.group(1), int(u.group(2)), int(u.group(3)), first, last, total, int(status), _utc(msec)
 
 
 def parse_request(line: str) -> tuple[str, int, int, dt.datetime] | None:
@@ -85,8 +84,12 @@ def parse_request(line: str) -> tuple[str, int, int, dt.datetime] | None:
     u = URI_RE.match(m.group(4)) if m is not None else None
     if m is None or u is None or u.group(4) is None or m.group(2) not in SIGNED_OK:
         return None
-    when = dt.datetime.fromtimestamp(float(m.group(1)), dt.timezone.utc).replace(tzinfo=None)
-    return u.group(1), int(u.group(2)), int(u.group(3)), when
+    return u.group(1), int(u.group(2)), int(u.group(3)), _utc(m.group(1))
+
+
+def _utc(msec: str) -> dt.datetime:
+    """nginx's ``$msec`` (seconds since the epoch) as a naive UTC time, as the database stores times."""
+    return dt.datetime.fromtimestamp(float(msec), dt.timezone.utc).replace(tzinfo=None)
 
 
 def ingest(media_log, path: str) -> int:
