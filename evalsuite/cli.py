@@ -106,8 +106,8 @@ def run() -> None:
 
     Once a command has finished, the interpreter's own shutdown (freeing every module and object one by one)
     takes 0.1-0.15 s more, a twentieth of a short rendering command. So the exit handlers run here (files,
-    logs, temporary folders, child processes, GL contexts: everything ``atexit`` knows) and the process then
-    ends at once with the command's exit status. Where another thread is still running, or the interpreter
+    logs, temporary folders, child processes: everything ``atexit`` knows, except freeing GL contexts, which the
+    OS does) and the process then ends at once with the command's exit status. Where another thread is still running, or the interpreter
     has no ``atexit._run_exitfuncs``, the normal shutdown is kept. Tests call :func:`main` and never exit."""
     import atexit
     import contextlib
@@ -125,6 +125,9 @@ def run() -> None:
     others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
     if run_exitfuncs is None or others or not (code is None or isinstance(code, int)):
         sys.exit(code)
+    gl = sys.modules.get("renderers._gl")
+    if gl is not None:        # GL contexts need no freeing in a process that ends now (pyrender's delete: ~35 ms)
+        atexit.unregister(gl.free_contexts)
     run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(OSError, ValueError, AttributeError):

@@ -11,7 +11,8 @@ optimize): about a second of a rendering command's start, though drawing our mes
 :func:`import_pyrender` therefore imports pyrender with a stand-in ``trimesh`` module that loads the real
 package the first time anything asks for one of its attributes (the stick figure's templates, a glTF
 character, pyrender's shadow pass); only ``trimesh.transformations`` (numpy only), which pyrender's nodes use
-directly, is loaded at once.
+directly, is loaded at once. pyrender's scene graph is a tree, kept without networkx
+(:mod:`renderers._scene_tree`).
 
 Also here: the cached offscreen contexts, our colour-only framebuffer read (of the redrawn rectangle only),
 the shader cache that draws meshes with the cheap ``shaders/stick.*`` program, and the replay of a clip's draw
@@ -53,11 +54,30 @@ def import_pyrender():
     if "pyrender" not in sys.modules:
         _defer_trimesh()
         _defer_viewer()
+        with _node_tree_for_networkx():
+            import pyrender
     import pyrender
     import pyrender.renderer
 
     _install_samples_hook(pyrender.renderer)
     return pyrender
+
+
+@contextlib.contextmanager
+def _node_tree_for_networkx():
+    """While pyrender imports, ``networkx`` is :data:`renderers._scene_tree.NETWORKX` (unless networkx is
+    imported already); afterwards ``sys.modules`` has no stand-in, so other importers get the real package."""
+    if "networkx" in sys.modules:
+        yield
+        return
+    from renderers._scene_tree import NETWORKX
+
+    sys.modules["networkx"] = NETWORKX
+    try:
+        yield
+    finally:
+        if sys.modules.get("networkx") is NETWORKX:
+            del sys.modules["networkx"]
 
 
 class _DeferredTrimesh(types.ModuleType):
@@ -163,7 +183,8 @@ def _read_colour_only(self, scene, flags):
     than drawing a stick figure), and only the rectangle ``self._evalsuite_read_rect`` (``(x, y, w, h)``, GL
     rows from the bottom; None: all) that this frame redrew, into a frame kept on the context: outside it
     the framebuffer, and so the kept frame, still hold what the last read saw (see ``FigureRenderer._scissor``).
-    Returns a copy ``(H, W, 3)`` uint8, top row first."""
+    Returns ``(H, W, 3)`` uint8, top row first: a read-only view of that kept frame, valid until the next read
+    (copy to keep; the compositor and the encoder copy it once anyway)."""
     from OpenGL import GL
 
     width, height = self._main_fb_dims
@@ -184,7 +205,9 @@ def _read_colour_only(self, scene, flags):
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         buf = GL.glReadPixels(x, y, w, h, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
         frame[y:y + h, x:x + w] = np.frombuffer(buf, dtype=np.uint8).reshape(h, w, 3)
-    return frame[::-1].copy(), None
+    view = frame[::-1]
+    view.flags.writeable = False
+    return view, None
 
 
 def capture_draws(pr, inner, scene, flags):
@@ -285,12 +308,14 @@ def offscreen_renderer(pr, width: int, height: int, samples: int):
         inner._program_cache = _shader_cache(pr)
         inner.samples = int(samples)
         if not _CONTEXTS:
-            atexit.register(_free_contexts)
+            atexit.register(free_contexts)
         _CONTEXTS[key] = renderer
     return renderer
 
 
-def _free_contexts():
+def free_contexts() -> None:
+    """Delete the cached offscreen contexts (at exit; ``evalsuite.cli.run`` skips it: a process that ends at once
+    gets its memory back from the OS, and pyrender's delete runs a full garbage collection, ~35 ms)."""
     for renderer in _CONTEXTS.values():
         with contextlib.suppress(Exception):   # best effort while the interpreter shuts down
             renderer.delete()

@@ -117,7 +117,10 @@ class Compositor:
             self.canvas[r * cell_h:r * cell_h + cell_h - gap, c * cell_w:c * cell_w + panel_w] = background
 
     def compose(self, panels) -> np.ndarray:
-        """The composed frame (the same buffer every call: write it out before the next)."""
+        """The composed frame (the same buffer every call, or the one panel when it fills the frame: write it
+        out before the next)."""
+        if len(self.slots) == 1 and self.slots[0] == (0, 0) and np.shape(panels[0]) == self.canvas.shape:
+            return panels[0]          # one panel, no caption: no copy (the encoder copies it once)
         for (y, x), p in zip(self.slots, panels):
             self.canvas[y:y + self.ph, x:x + self.pw] = p
         return self.canvas

@@ -146,6 +146,8 @@ def render_video(motions, out, settings: RenderSettings | None = None, *, audio=
             VideoWriter(out, comp.width, comp.height, fps, audio=audio_data, crf=settings.crf,
                         bitrate=bitrate) as writer:
         streams = [renderer.frames(mesh, pos[:n]) for mesh, pos in zip(meshes, positions)]
+        if len(streams) > 1:      # a frame is a view of the context's buffer, which the next panel's draw overwrites
+            streams = [(frame.copy() for frame in stream) for stream in streams]
         for i, panels in enumerate(tqdm(zip(*streams), total=n, disable=not progress, unit="frame",
                                         desc=label or pathlib.Path(out).name, leave=False)):
             frame = comp.compose(panels)

@@ -245,8 +245,11 @@ class FigureRenderer:
         background = (tuple(self.settings.style.background), self._token)   # what lies outside the boxes
         rect = None
         if self.partial_redraw and not self.settings.style.shadow:
-            homo = vertices @ self._clip[:3, :3].T + self._clip[:3, 3]
-            wcoord = vertices @ self._clip[3, :3] + self._clip[3, 3]
+            # x, y and w in clip space (einsum, not a BLAS product: OpenBLAS would wake its threads each frame,
+            # and they spin on the cores llvmpipe and the encoder need)
+            rows = self._clip[[0, 1, 3]]
+            homo = np.einsum("vi,ki->vk", vertices, rows[:, :3]) + rows[:, 3]
+            wcoord = homo[:, 2]
             if len(vertices) and np.all(wcoord > 1e-9):
                 ndc = homo[:, :2] / wcoord[:, None]
                 x0 = int(np.floor((ndc[:, 0].min() + 1.0) * 0.5 * w)) - 2

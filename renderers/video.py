@@ -120,7 +120,7 @@ class VideoWriter:
     def write(self, frame: np.ndarray) -> None:
         if self._error is not None:
             raise self._error
-        self._queue.put(np.ascontiguousarray(frame, dtype=np.uint8).tobytes())
+        self._queue.put(np.asarray(frame, dtype=np.uint8).tobytes())     # one copy, in row order, whatever the strides
         self.n_frames += 1
 
     def close(self) -> None:

@@ -54,3 +54,24 @@ def test_a_running_thread_keeps_the_normal_shutdown(tmp_path):
         """, str(marker))
     assert proc.returncode == 0
     assert marker.read_text() == "done"     # the interpreter waited for the thread, as without run()
+
+
+def test_gl_contexts_are_left_to_the_os_on_the_quick_exit(tmp_path):
+    """renderers._gl.free_contexts (pyrender's delete: a full garbage collection) is not run before the quick
+    exit; the other exit handlers are."""
+    freed, other = tmp_path / "freed", tmp_path / "other"
+    proc = _python("""
+        import atexit, pathlib, sys
+        import renderers._gl as gl
+        freed, other = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
+        def free_contexts():
+            freed.write_text("yes")
+        gl.free_contexts = free_contexts           # as registered when a context was made
+        atexit.register(free_contexts)
+        atexit.register(lambda: other.write_text("yes"))
+        from evalsuite.cli import run
+        sys.argv = ["evalsuite", "--version"]
+        run()
+        """, str(freed), str(other))
+    assert proc.returncode == 0, proc.stderr
+    assert other.read_text() == "yes" and not freed.exists()

@@ -206,9 +206,10 @@ def test_egl_is_the_default_platform_and_a_user_choice_is_kept():
 
 
 def test_rendering_imports_neither_trimesh_nor_scipy_and_trimesh_still_works_after():
-    """A rendering command's start: pyrender is imported with trimesh and its viewer deferred (renderers._gl) and
-    the stick figure's parts are stored, so drawing a mannequin and a stick figure loads neither trimesh, scipy nor
-    pyglet (about a second); asking for trimesh or the viewer afterwards gets the real one."""
+    """A rendering command's start: pyrender is imported with trimesh and its viewer deferred (renderers._gl),
+    its scene graph without networkx (renderers._scene_tree), and the stick figure's parts are stored, so drawing
+    a mannequin and a stick figure loads neither trimesh, scipy, networkx nor pyglet (over a second); asking for
+    trimesh, networkx or the viewer afterwards gets the real one."""
     import sys
 
     code = ("import sys\n"
@@ -222,19 +223,22 @@ def test_rendering_imports_neither_trimesh_nor_scipy_and_trimesh_still_works_aft
             "frame = render_frames([m], RenderSettings(width=64, height=48, body='mannequin'))[0]\n"
             "stick = render_frames([m], RenderSettings(width=64, height=48, body='stick'))[0]\n"
             "print('drawn', min(int((f < 200).any(axis=-1).sum()) for f in (frame, stick)))\n"
-            "print('loaded', sorted({k.split('.')[0] for k in sys.modules} & {'scipy', 'pyglet'}),"
+            "print('loaded', sorted({k.split('.')[0] for k in sys.modules} & {'scipy', 'pyglet', 'networkx'}),"
             " type(sys.modules['trimesh']).__name__)\n"
             "import trimesh\n"
             "print('after', trimesh.creation.icosphere(subdivisions=1).vertices.shape,"
             " trimesh.transformations.identity_matrix().shape, type(sys.modules['trimesh']).__name__)\n"
             "from pyrender.viewer import Trackball\n"
             "import pyrender\n"
-            "print('viewer', 'pyglet' in sys.modules, pyrender.Viewer.__module__, Trackball.__name__)\n")
+            "print('viewer', 'pyglet' in sys.modules, pyrender.Viewer.__module__, Trackball.__name__)\n"
+            "import networkx\n"
+            "print('networkx', networkx.DiGraph.__module__)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.splitlines()
     assert int(out[0].split()[1]) > 20, out                      # the figure was drawn
     assert out[1] == "loaded [] _DeferredTrimesh", out
     assert out[2] == "after (42, 3) (4, 4) module", out
     assert out[3] == "viewer True pyrender.viewer Trackball", out   # pyrender's viewer (pyglet) loads on use
+    assert out[4] == "networkx networkx.classes.digraph", out        # the real package for anyone else
 
 
 def test_floor_and_shadow():
