@@ -277,7 +277,7 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
         crash["restarted"] = True
 
     t0 = time.perf_counter()
-    cpu0 = group_cpu([server.proc.pid, nginx.proc.pid]), resource.getrusage(resource.RUSAGE_SELF)
+    cpu0 = group_cpu([server.proc.pid, nginx.proc.pid]), resource.getrusage(resource.RUSAGE_SELF), comm_cpu("postgres")
     if kill_after is not None:
         threading.Thread(target=killer, daemon=True).start()
     errors = []
@@ -293,6 +293,7 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
         server_cpu = group_cpu([server.proc.pid, nginx.proc.pid]) - (0.0 if crash else cpu0[0])
         self_cpu = resource.getrusage(resource.RUSAGE_SELF)
         client_cpu = (self_cpu.ru_utime + self_cpu.ru_stime) - (cpu0[1].ru_utime + cpu0[1].ru_stime)
+        db_cpu = comm_cpu("postgres") - cpu0[2] if db_url.startswith("postgresql") else 0.0
         raw, rows = fetch_export(nginx.url)
         seen = nginx_times(nginx.access_log)
     finally:
@@ -310,7 +311,7 @@ def run_load(name, study, stim, db_url, participants, args, kill_after=None):
     return {"name": name, "participants": participants, "wall_s": wall, "finished": finished, "errors": errors,
             "crash": crash, "retries": sum(c.retries for c in clients), "server_cpu_s": server_cpu,
             "retry_reasons": sum((c.retry_reasons for c in clients), collections.Counter()),
-            "client_cpu_s": client_cpu,
+            "client_cpu_s": client_cpu, "db_cpu_s": db_cpu,
             "answers_per_s": check["acknowledged"] / wall, **lat, **check}
 
 
@@ -331,6 +332,25 @@ def nginx_times(path):
                 if parts[1] != "-":           # gunicorn's time as nginx saw it: queue + app
                     seen["upstream_" + kind].append(sum(float(x) for x in parts[1].split(",")))
     return seen
+
+
+def comm_cpu(prefix):
+    """CPU seconds (user + system) used so far by the live processes whose command name starts with ``prefix``
+    (Linux /proc): PostgreSQL's postmaster and backends (every one on the machine; the benchmark's own cluster is
+    the only busy one)."""
+    ticks, total = os.sysconf("SC_CLK_TCK"), 0
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as fh:
+                head, rest = fh.read().rsplit(")", 1)
+        except OSError:
+            continue
+        if head.split("(", 1)[1].startswith(prefix):
+            fields = rest.split()
+            total += int(fields[11]) + int(fields[12])
+    return total / ticks
 
 
 def group_cpu(groups):
@@ -373,7 +393,10 @@ def report(r):
         print("client retries by request and answer: " + ", ".join(f"{k}: {n}" for k, n in r["retry_reasons"].most_common()))
     print(f"CPU: gunicorn + nginx {r['server_cpu_s']:.1f} s ({1000 * r['server_cpu_s'] / max(r['acknowledged'], 1):.0f} ms "
           f"per answer with its page and videos, {r['server_cpu_s'] / r['wall_s']:.2f} cores on average), simulated "
-          f"browsers {r['client_cpu_s']:.1f} s; load average now {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+          f"browsers {r['client_cpu_s']:.1f} s" + (f", PostgreSQL {r['db_cpu_s']:.1f} s "
+                                                  f"({1000 * r['db_cpu_s'] / max(r['acknowledged'], 1):.0f} ms per answer)"
+                                                  if r["db_cpu_s"] else "")
+          + f"; load average now {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     for kind, label in (("enter", "entry (Prolific link)"), ("page", "page view"), ("answer", "answer POST"),
                         ("video", "video GET (nginx)")):
         print(f"{label:22s} p50 {r[kind + '_p50']:6.0f} ms   p95 {r[kind + '_p95']:6.0f} ms   "
