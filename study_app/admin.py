@@ -27,6 +27,7 @@ from study_app.context import get_store, get_study
 from study_app.embodiment import describe_embodiment
 from study_app.errors import StudyStateError
 from study_app.export import raw_json_chunks, result_rows, results_csv
+from study_app.media_signed import links_of
 from study_app.monitor import answer_count, participant_rows, plan_counts, status_counts, unplayable_reports
 from study_app.operations import (
     exclude,
@@ -170,21 +171,22 @@ def export_review():
 def operation(name):
     """The operations of the admin page's forms: release, topup, exclude, include, forget, pilot."""
     study, store, form = get_study(), get_store(), request.form
+    links = links_of(current_app.config, study)         # signed-URL links go with the session's end
     try:
         if name == "release":
-            release_plan(store, study, form.get("plan", ""))
+            release_plan(store, study, form.get("plan", ""), links=links)
             flash(f"plan {form.get('plan')} released", "ok")
         elif name == "topup":
             n = form.get("n", "")
             keys = topup(store, study, int(n) if n.isdigit() else 0)
             flash(f"{len(keys)} plans added", "ok")
         elif name in ("exclude", "include"):
-            exclude(store, study, form.get("session", ""), form.get("reason", ""), undo=name == "include")
+            exclude(store, study, form.get("session", ""), form.get("reason", ""), undo=name == "include", links=links)
             flash(f"session {form.get('session')} {name}d", "ok")
         elif name == "forget":
             if form.get("confirm") != form.get("participant"):
                 raise StudyStateError("type the participant id a second time to confirm", field="confirm")
-            n = forget(store, study, form.get("participant", ""))
+            n = forget(store, study, form.get("participant", ""), links=links)
             flash(f"participant forgotten: {n} rows deleted", "ok")
         elif name == "pilot":
             set_pilot(store, study, form.get("on") == "1")

@@ -1,5 +1,6 @@
-"""``evalsuite study release|topup|exclude|pilot|forget|review-export|prolific-review|status``: the operations on a
-running study (:mod:`study_app.operations`), from the command line, on the study's database."""
+"""``evalsuite study release|topup|exclude|pilot|forget|prune-links|review-export|prolific-review|status``: the
+operations on a running study (:mod:`study_app.operations`), from the command line, on the study's database
+(and, with signed video URLs, the server's links folder: ``EVALSUITE_MEDIA_LINKS``)."""
 from __future__ import annotations
 
 import os
@@ -33,6 +34,26 @@ def _db_options(f):
     return click.argument("study_file", type=click.Path(exists=True, dir_okay=False))(f)
 
 
+def _links_options(f):
+    f = click.option("--secret-key", envvar="EVALSUITE_SECRET_KEY", default=None,
+                     help="The server's SECRET_KEY, which names the links (env EVALSUITE_SECRET_KEY).")(f)
+    return click.option("--links", "links_dir", envvar="EVALSUITE_MEDIA_LINKS", default=None,
+                        type=click.Path(file_okay=False),
+                        help="The server's folder of signed-URL links (env EVALSUITE_MEDIA_LINKS, set with "
+                             "EVALSUITE_MEDIA_SERVER=nginx-signed); the session's links are removed too.")(f)
+
+
+def _links(st, links_dir, secret_key):
+    """The server's links (study_app.media_signed.Links), or None without a links folder."""
+    from study_app.media_signed import links_of
+    if not links_dir:
+        return None
+    if not secret_key:
+        raise click.ClickException("--links needs --secret-key or EVALSUITE_SECRET_KEY (the server's, which "
+                                   "names the links)")
+    return links_of({"MEDIA_SERVER": "nginx-signed", "MEDIA_LINKS": links_dir, "SECRET_KEY": secret_key}, st)
+
+
 def _run(fn, *args, **kwargs):
     from study_app.errors import StudyStateError
     try:
@@ -44,11 +65,12 @@ def _run(fn, *args, **kwargs):
 @click.command()
 @_db_options
 @click.argument("plan")
-def release(study_file, db, instance, plan):
+@_links_options
+def release(study_file, db, instance, plan, links_dir, secret_key):
     """Hand the reserved PLAN (e.g. plan-0003) out again now; its session ends as expired."""
     from study_app.operations import release_plan
     st, store = _study_store(study_file, instance, db)
-    sid = _run(release_plan, store, st, plan)
+    sid = _run(release_plan, store, st, plan, links=_links(st, links_dir, secret_key))
     click.echo(f"plan {plan} released (session {sid or 'none'})")
 
 
@@ -68,11 +90,12 @@ def topup(study_file, db, instance, n):
 @click.argument("session")
 @click.option("--reason", default="", help="Why the session is excluded (required unless --undo).")
 @click.option("--undo", is_flag=True, help="Take an exclusion back.")
-def exclude(study_file, db, instance, session, reason, undo):
+@_links_options
+def exclude(study_file, db, instance, session, reason, undo, links_dir, secret_key):
     """Exclude SESSION (a session or participant id) from the export, with --reason."""
     from study_app.operations import exclude as mark
     st, store = _study_store(study_file, instance, db)
-    sid = _run(mark, store, st, session, reason, undo=undo)
+    sid = _run(mark, store, st, session, reason, undo=undo, links=_links(st, links_dir, secret_key))
     click.echo(f"session {sid} {'included again' if undo else 'excluded'}")
 
 
@@ -92,14 +115,32 @@ def pilot(study_file, db, instance, state):
 @_db_options
 @click.argument("participant")
 @click.option("--yes", is_flag=True, help="Do not ask for confirmation.")
-def forget(study_file, db, instance, participant, yes):
-    """Delete every row stored about PARTICIPANT (participant or session id), a GDPR erasure request."""
+@_links_options
+def forget(study_file, db, instance, participant, yes, links_dir, secret_key):
+    """Delete every row stored about PARTICIPANT (participant or session id), a GDPR erasure request, and
+    the links of their signed video URLs."""
     from study_app.operations import forget as erase
     st, store = _study_store(study_file, instance, db)
+    links = _links(st, links_dir, secret_key)
     if not yes:
         click.confirm(f"delete everything stored about {participant}? This cannot be undone", abort=True)
-    n = _run(erase, store, st, participant)
+    n = _run(erase, store, st, participant, links=links)
     click.echo(f"{participant}: {n} rows deleted")
+
+
+@click.command("prune-links")
+@_db_options
+@_links_options
+def prune_links(study_file, db, instance, links_dir, secret_key):
+    """Remove the signed-URL links (EVALSUITE_MEDIA_SERVER=nginx-signed) of every session that is no longer
+    active: finished, failed, expired (reservations that ran out are expired now) or excluded. Active
+    sessions keep theirs; the stimulus files are never touched. Safe to run at any time, e.g. hourly."""
+    from study_app.operations import prune_links as prune
+    st, store = _study_store(study_file, instance, db)
+    links = _links(st, links_dir, secret_key)
+    if links is None:
+        raise click.ClickException("give the links folder: --links or EVALSUITE_MEDIA_LINKS")
+    click.echo(f"{prune(store, st, links)} links of ended sessions removed from {links.folder}")
 
 
 @click.command("review-export")
@@ -166,4 +207,4 @@ def status(study_file, db, instance):
         click.echo(f"{a['block']}: {a['votes']} votes; {order}; {verdict}")
 
 
-COMMANDS = [release, topup, exclude, pilot, forget, review_export, prolific_review, status]
+COMMANDS = [release, topup, exclude, pilot, forget, prune_links, review_export, prolific_review, status]

@@ -13,22 +13,33 @@ after ``expires`` (``MEDIA_LINK_SECONDS``, default 3600; a reload of the page si
 has neither a signed URL nor a link. nginx's media log (:mod:`study_app.media_nginx`) is then the whole
 playback record: the requests (``media_requests``) and the bytes sent (``media_served``).
 
-The trade-off: a URL works for whoever holds it until it expires (no session cookie is checked), and a
-session that was excluded or withdrawn keeps its already-signed URLs until then (docs/deploy.md).
+The trade-off: a URL works for whoever holds it until it expires (no session cookie is checked). A session's
+links are removed when it ends (finished or failed with its last answer, released, excluded) and when its
+participant is forgotten, so its URLs then get 404 at once; links of sessions that ended otherwise (a
+reservation that ran out) go with ``evalsuite study prune-links`` (docs/deploy.md). A link's name is computed
+from the session's plan pages (slots per page) and the stimuli's extensions: removing one never lists the
+folder, and never touches the file a link points to.
 """
 from __future__ import annotations
 
 import base64
 import contextlib
+import dataclasses
 import hashlib
 import hmac
 import os
+import stat
 import threading
 import time
+from collections.abc import Iterable
 
 from flask import current_app, url_for
 
-__all__ = ["link_key", "sign", "signed_url", "ensure_link", "video_urls"]
+from study_app.answers import n_slots
+from study_app.context import get_store, get_study
+
+__all__ = ["link_key", "sign", "signed_url", "ensure_link", "video_urls", "Links", "links_of", "link_names",
+           "remove_links", "remove_session_links", "prune_links", "drop_session_links"]
 
 
 def link_key(secret_key: str, sid: str, index: int, slot: int) -> str:
@@ -86,3 +97,67 @@ def video_urls(study, kind, spec: dict, sid: str, index: int) -> list[str]:
         if media.body is None and media.file in files:
             urls[k] = signed_url(current_app.config, str(study.manifest.root), sid, index, k, media.file)
     return urls
+
+
+@dataclasses.dataclass(frozen=True)
+class Links:
+    """Where a server's links are (``MEDIA_LINKS``) and what their names are made of."""
+
+    folder: str
+    secret_key: str                 # the server's SECRET_KEY (link_key)
+    exts: tuple[str, ...]           # the stimuli's file extensions, e.g. (".mp4",)
+
+
+def links_of(config, study) -> Links | None:
+    """The links of a server's config (``MEDIA_SERVER = "nginx-signed"``), or None in any other mode."""
+    if config.get("MEDIA_SERVER") != "nginx-signed" or not config.get("MEDIA_LINKS"):
+        return None
+    exts = sorted({os.path.splitext(f)[1].lower() for f in study.manifest.by_file()})
+    return Links(str(config["MEDIA_LINKS"]), config["SECRET_KEY"], tuple(exts))
+
+
+def link_names(links: Links, sid: str, pages: list[dict]) -> list[str]:
+    """Every name a link of the session can have: ``link_key(secret, sid, page, slot) + ext`` for each page,
+    each media slot of it (its kind's ``n_slots``) and each stimulus extension."""
+    return [link_key(links.secret_key, sid, i, k) + ext for i, page in enumerate(pages)
+            for k in range(n_slots(page)) for ext in links.exts]
+
+
+def remove_links(folder: str, names: Iterable[str]) -> int:
+    """Remove ``folder/name`` for each name that is a symbolic link (the link, never its target; anything
+    else is left). A missing folder or a link already gone is no error. Returns how many were removed."""
+    removed = 0
+    for name in names:
+        path = os.path.join(folder, name)
+        try:
+            if stat.S_ISLNK(os.lstat(path).st_mode):
+                os.unlink(path)
+                removed += 1
+        except OSError:                 # gone already (another process), or no folder
+            continue
+    return removed
+
+
+def remove_session_links(links: Links, sid: str, pages: list[dict]) -> int:
+    """Remove a session's links (:func:`link_names`): its signed URLs then get 404 from nginx."""
+    return remove_links(links.folder, link_names(links, sid, pages))
+
+
+def prune_links(links: Links, sessions: Iterable[tuple[str, list[dict]]]) -> int:
+    """Remove the links of ``sessions`` (session id, plan pages) among those in the folder (listed once)."""
+    try:
+        with os.scandir(links.folder) as entries:
+            present = {e.name for e in entries if e.is_symlink()}
+    except FileNotFoundError:
+        return 0
+    return remove_links(links.folder, (n for sid, pages in sessions for n in link_names(links, sid, pages)
+                                       if n in present))
+
+
+def drop_session_links(sid: str) -> int:
+    """In a request: remove the links of the session ``sid`` that has just ended (no-op unless nginx-signed)."""
+    links = links_of(current_app.config, get_study())
+    if links is None:
+        return 0
+    _sess, pages = get_store().read_session(sid)
+    return remove_session_links(links, sid, pages or [])

@@ -1,7 +1,9 @@
 """Operations on a running study, shared by the admin page and ``evalsuite study ...``: release a reserved
 plan, add plans (top-up), exclude a session, pilot mode, forget a participant (GDPR), and the exports that
 leave pilot and excluded sessions out, replace participant ids by keyed hashes, or list each submission's
-review decision for Prolific. Every function is one transaction on the :class:`~study_app.storage.Store`."""
+review decision for Prolific. Every function is one transaction on the :class:`~study_app.storage.Store`;
+given the server's signed-URL ``links`` (:func:`study_app.media_signed.links_of`), those that end a session or
+delete it also remove its links, and :func:`prune_links` removes those of every session that has ended."""
 from __future__ import annotations
 
 import csv
@@ -17,12 +19,14 @@ from sqlalchemy import delete, func, select, update
 
 from study_app.design import build_plans
 from study_app.errors import StudyStateError
+from study_app.media_signed import Links, remove_session_links
+from study_app.media_signed import prune_links as prune_folder
 from study_app.model import Study
 from study_app.outcomes import code_for
 from study_app.storage import Base, ParticipantSession, Plan, SessionMark, Store, StudyFlag, utcnow
 
 __all__ = ["release_plan", "topup", "exclude", "set_pilot", "pilot_mode", "mark_if_pilot", "forget",
-           "decline_without_plan", "marks",
+           "decline_without_plan", "marks", "ended_sessions", "prune_links",
            "export_dump", "pseudonym", "pseudonym_key", "PLATFORM_ID_FIELDS", "review_rows", "review_csv", "REVIEW_COLUMNS"]
 
 log = logging.getLogger("study_app.operations")
@@ -40,7 +44,19 @@ def _session(db, study: Study, key: str) -> ParticipantSession:
     return sess
 
 
-def release_plan(store: Store, study: Study, plan_key: str) -> str:
+def _pages(db, store: Store, sess: ParticipantSession) -> list[dict]:
+    """The pages a session was shown: its plan's (kept after the plan is released), else the entry pages."""
+    pages = db.scalar(select(Plan.pages).where(Plan.id == sess.plan_id)) if sess.plan_id is not None else None
+    return pages if pages is not None else (store.entry_pages or [])
+
+
+def _drop_links(links: Links | None, sid: str, pages: list[dict]) -> None:
+    if links is not None and sid:
+        n = remove_session_links(links, sid, pages)
+        log.info("session %s: %d signed-URL links removed", sid, n)
+
+
+def release_plan(store: Store, study: Study, plan_key: str, links: Links | None = None) -> str:
     """Hand a reserved plan out again now (its participant left without the reservation expiring): the
     session holding it ends as ``expired`` (reason ``released``). Returns that session's id."""
     with store.Session.begin() as db:
@@ -56,6 +72,8 @@ def release_plan(store: Store, study: Study, plan_key: str) -> str:
             sess.status, sess.end_reason, sess.finished_at = "expired", "released", utcnow()
         plan.status, plan.session_id, plan.reserved_until = "free", None, None
         plan.times_released += 1
+        pages = plan.pages
+    _drop_links(links, sid, pages)
     log.info("study %s: plan %s released by the researcher (session %s)", study.id, plan_key, sid)
     return sid
 
@@ -83,9 +101,9 @@ def topup(store: Store, study: Study, n: int) -> list[str]:
     return keys
 
 
-def exclude(store: Store, study: Study, key: str, reason: str, undo: bool = False) -> str:
-    """Exclude a session (by session or participant id) from the export, with the reason; ``undo`` takes
-    the exclusion back. Returns the session id."""
+def exclude(store: Store, study: Study, key: str, reason: str, undo: bool = False, links: Links | None = None) -> str:
+    """Exclude a session (by session or participant id) from the export, with the reason (and remove its
+    links); ``undo`` takes the exclusion back. Returns the session id."""
     reason = (reason or "").strip()
     if not undo and not reason:
         raise StudyStateError("expected a reason for the exclusion", field="reason")
@@ -94,7 +112,9 @@ def exclude(store: Store, study: Study, key: str, reason: str, undo: bool = Fals
         mark = db.get(SessionMark, sess.id) or SessionMark(session_id=sess.id, pilot=False)
         mark.excluded, mark.reason, mark.marked_at = not undo, "" if undo else reason[:500], utcnow()
         db.add(mark)
-        sid = sess.id
+        sid, pages = sess.id, _pages(db, store, sess)
+    if not undo:
+        _drop_links(links, sid, pages)
     log.info("study %s: session %s %s%s", study.id, sid, "included again" if undo else "excluded: ",
              "" if undo else reason)
     return sid
@@ -148,15 +168,15 @@ def _rowcount(result: Any) -> int:
     return int(getattr(result, "rowcount", 0) or 0)
 
 
-def forget(store: Store, study: Study, participant: str) -> int:
+def forget(store: Store, study: Study, participant: str, links: Links | None = None) -> int:
     """Delete everything stored about one participant (a GDPR erasure request): every row of every table
-    that names their session or participant id; their plan is handed out again. Logs one line with a
-    hash of the id (not the id). Returns the number of rows deleted."""
+    that names their session or participant id, and their signed-URL ``links``; their plan is handed out
+    again. Logs one line with a hash of the id (not the id). Returns the number of rows deleted."""
     deleted = 0
     store.media_log.flush()             # no buffered media request may come back after the deletion
     with store.Session.begin() as db:
         sess = _session(db, study, participant)
-        sid, pid = sess.id, sess.participant
+        sid, pid, pages = sess.id, sess.participant, _pages(db, store, sess)
         db.execute(update(Plan).where(Plan.session_id == sid).values(
             status="free", session_id=None, reserved_until=None, times_released=Plan.times_released + 1))
         for table in reversed(Base.metadata.sorted_tables):
@@ -165,9 +185,32 @@ def forget(store: Store, study: Study, participant: str) -> int:
             if "session_id" in table.c:
                 deleted += _rowcount(db.execute(delete(table).where(table.c.session_id == sid)))
         deleted += _rowcount(db.execute(delete(ParticipantSession).where(ParticipantSession.id == sid)))
+    _drop_links(links, sid, pages)
     log.warning("study %s: participant %s forgotten on request: %d rows deleted", study.id,
                 hashlib.sha256(pid.encode()).hexdigest()[:12], deleted)
     return deleted
+
+
+def ended_sessions(store: Store, study: Study) -> list[tuple[str, list[dict]]]:
+    """(session id, pages) of every session that is no longer active: ended (finished, failed, expired;
+    reservations that ran out are expired first) or excluded."""
+    with store.Session.begin() as db:
+        store.release_expired(db, study.id, utcnow())
+    with store.ReadSession() as db:
+        rows = db.execute(select(ParticipantSession.id, Plan.pages).outerjoin(
+            Plan, Plan.id == ParticipantSession.plan_id).outerjoin(
+            SessionMark, SessionMark.session_id == ParticipantSession.id).where(
+            ParticipantSession.study == study.id,
+            (ParticipantSession.status != "active") | (SessionMark.excluded.is_(True)))).all()
+    return [(sid, pages if pages is not None else (store.entry_pages or [])) for sid, pages in rows]
+
+
+def prune_links(store: Store, study: Study, links: Links) -> int:
+    """Remove the signed-URL links of every session that is no longer active (:func:`ended_sessions`);
+    an active session's links stay. Returns how many were removed."""
+    n = prune_folder(links, ended_sessions(store, study))
+    log.info("study %s: %d signed-URL links of ended sessions removed", study.id, n)
+    return n
 
 
 def pseudonym_key(secret: str) -> bytes:

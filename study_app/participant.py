@@ -18,7 +18,7 @@ from flask import Blueprint, abort, current_app, jsonify, redirect, render_templ
 from study_app.adaptive import assign_pair
 from study_app.answers import n_slots, parse_events
 from study_app.context import get_store, get_study
-from study_app.media_signed import video_urls
+from study_app.media_signed import drop_session_links, video_urls
 from study_app.operations import decline_without_plan, mark_if_pilot
 from study_app.outcomes import code_for
 from study_app.pages import get_kind
@@ -281,6 +281,8 @@ def answer(sid, index):
         return jsonify(error="this page was already answered in another tab or window; the answer given "
                        "there is kept", next=nxt, stale=True, current_page=sess.current_page,
                        session_status=sess.status), 409
+    if status is SubmitStatus.STORED and sess.status != "active":
+        drop_session_links(sid)         # its signed video URLs stop working now (nginx: 404)
     extra = {}
     if ans is not None and ans.events_dropped:
         extra["events_dropped"] = ans.events_dropped
