@@ -13,9 +13,13 @@ COPY deploy ./deploy
 RUN pip install --no-cache-dir ".[serve,postgres]"
 USER evalsuite
 WORKDIR /var/lib/evalsuite
+# Signed video URLs served by nginx alone (docs/deploy.md): the links folder lies in the volume nginx mounts at
+# the same path; EVALSUITE_MEDIA_LINK_SECRET comes from the compose environment, never from this file.
 ENV EVALSUITE_BIND=0.0.0.0:8000 \
-    EVALSUITE_MEDIA_SERVER=nginx \
+    EVALSUITE_MEDIA_SERVER=nginx-signed \
     EVALSUITE_MEDIA_ACCESS_LOG=/var/lib/evalsuite/medialog/media.log \
+    EVALSUITE_MEDIA_LINKS=/var/lib/evalsuite/medialog/links \
+    EVALSUITE_MEDIA_LINK_SECONDS=3600 \
     EVALSUITE_TRUSTED_PROXIES=1
 EXPOSE 8000
 CMD ["gunicorn", "-c", "/opt/evalsuite/src/deploy/gunicorn.conf.py"]

@@ -4,6 +4,7 @@ clients that cannot stall a new participant's entry, and a PostgreSQL backup res
 from __future__ import annotations
 
 import os
+import re
 import socket
 import subprocess
 import threading
@@ -236,7 +237,24 @@ def test_container_files_use_the_tested_nginx_site_and_gunicorn_settings():
     assert "${" + "NGINX_LISTEN}" in SITE_TEMPLATE.read_text()
     log = nginx["environment"]["EVALSUITE_MEDIA_ACCESS_LOG"]
     dockerfile = (root / "Dockerfile").read_text()
-    assert f"EVALSUITE_MEDIA_ACCESS_LOG={log}" in dockerfile and "EVALSUITE_MEDIA_SERVER=nginx" in dockerfile
+    assert f"EVALSUITE_MEDIA_ACCESS_LOG={log}" in dockerfile
+    # signed video URLs: the app's links folder is nginx's, on a volume both mount at the same place, and the
+    # stimuli the links point at are at the same path in both containers
+    assert re.search(r"^\s*EVALSUITE_MEDIA_SERVER=nginx-signed\b", dockerfile, re.M)
+    links = nginx["environment"]["EVALSUITE_MEDIA_LINKS"]
+    assert f"EVALSUITE_MEDIA_LINKS={links} " in dockerfile
+    shared = set(compose["app"]["volumes"]) & set(nginx["volumes"])
+    assert any(not v.startswith(".") and links.startswith(v.split(":")[1] + "/") for v in shared), shared
+    stim = nginx["environment"]["EVALSUITE_STIMULI"]
+    assert any(v.split(":")[1] in (stim, os.path.dirname(stim)) for v in compose["app"]["volumes"])
+    # the link secret: the same compose variable in both, required, never a literal (nor a default) in the files
+    secret = "${EVALSUITE_MEDIA_LINK_SECRET:?"
+    for service in (compose["app"], nginx):
+        assert str(service["environment"]["EVALSUITE_MEDIA_LINK_SECRET"]).startswith(secret), service
+    instructions = [line for line in dockerfile.splitlines() if not line.lstrip().startswith("#")]
+    assert not any("LINK_SECRET" in line for line in instructions)
+    assert "LINK_SECRET:-" not in (root / "docker-compose.yml").read_text()
+    assert "${" + "EVALSUITE_MEDIA_LINK_SECRET}" in SITE_TEMPLATE.read_text()     # filled in by the image's envsubst
     assert f'"-c", "/opt/evalsuite/src/deploy/{GUNICORN_CONF.name}"' in dockerfile
     assert nginx["environment"]["EVALSUITE_APP"] == "app:8000" and "EVALSUITE_BIND=0.0.0.0:8000" in dockerfile
     unit = (root / "deploy" / "systemd" / "evalsuite-study.service").read_text()
