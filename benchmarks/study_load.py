@@ -335,10 +335,11 @@ def nginx_times(path):
 
 
 def comm_cpu(prefix):
-    """CPU seconds (user + system) used so far by the live processes whose command name starts with ``prefix``
-    (Linux /proc): PostgreSQL's postmaster and backends (every one on the machine; the benchmark's own cluster is
-    the only busy one)."""
-    ticks, total = os.sysconf("SC_CLK_TCK"), 0
+    """CPU seconds (user + system) used so far by the processes whose command name starts with ``prefix`` (Linux
+    /proc): PostgreSQL's postmaster and backends (every one on the machine; the benchmark's own cluster is the
+    only busy one). The live ones count their own time; a postmaster also counts the time of the backends that
+    have exited (its reaped children: the pool closes its overflow connections)."""
+    ticks, procs = os.sysconf("SC_CLK_TCK"), {}
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
@@ -349,7 +350,8 @@ def comm_cpu(prefix):
             continue
         if head.split("(", 1)[1].startswith(prefix):
             fields = rest.split()
-            total += int(fields[11]) + int(fields[12])
+            procs[int(entry)] = (int(fields[1]), int(fields[11]) + int(fields[12]), int(fields[13]) + int(fields[14]))
+    total = sum(own + (reaped if parent not in procs else 0) for parent, own, reaped in procs.values())
     return total / ticks
 
 
