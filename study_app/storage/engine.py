@@ -2,8 +2,9 @@
 
 SQLite (the default) runs in WAL mode with ``synchronous=FULL``, a 60 s busy timeout, foreign keys on, and
 every writing transaction opened with ``BEGIN IMMEDIATE`` (read-only work, marked with the
-``evalsuite_readonly`` execution option, takes no lock). PostgreSQL, given by URL, gets a pre-pinged
-connection pool. :func:`init_db` creates the tables and stores a study's plans once.
+``evalsuite_readonly`` execution option, takes no lock). PostgreSQL, given by URL, gets a connection pool
+that pings a connection before handing it out when it sat unused for :data:`PING_AFTER_IDLE_S` seconds.
+:func:`init_db` creates the tables and stores a study's plans once.
 
 A SQLite database file gets the write queue (:mod:`study_app.storage.writequeue`): writers of every process
 and thread wait for their turn in the kernel instead of polling in SQLite's busy handler. A writing session
@@ -32,6 +33,37 @@ from study_app.storage.writequeue import connection_class
 __all__ = ["make_engine", "init_db", "WRITE_QUEUE_ENV"]
 
 WRITE_QUEUE_ENV = "EVALSUITE_SQLITE_WRITE_QUEUE"      # "0": no write queue (to compare with it, benchmarks)
+
+
+PING_AFTER_IDLE_S = 5.0
+
+
+def _ping_when_idle(engine) -> None:
+    """Test a pooled connection with a round trip before use only when it sat in the pool for over
+    :data:`PING_AFTER_IDLE_S` seconds (SQLAlchemy's ``pool_pre_ping`` pings on every check-out: a busy server's
+    requests check out several times each, and each ping costs the app and the database a round trip). A dead
+    connection is replaced (``DisconnectionError``: the pool retries with a fresh one). One that died within the
+    last seconds fails its statement instead; SQLAlchemy then drops the pool's older connections, and the
+    participant's browser retries the request with the same submit token (docs/study_app.md)."""
+    from sqlalchemy.exc import DisconnectionError
+
+    @event.listens_for(engine, "checkin")
+    def _checked_in(_dbapi_connection, record):
+        record.info["evalsuite_idle_since"] = time.monotonic()
+
+    @event.listens_for(engine, "checkout")
+    def _checked_out(dbapi_connection, record, _proxy):
+        since = record.info.get("evalsuite_idle_since")
+        if since is None or time.monotonic() - since <= PING_AFTER_IDLE_S:
+            return                      # new, or back in the pool a moment ago
+        try:
+            with dbapi_connection.cursor() as cur:
+                cur.execute("SELECT 1")
+            dbapi_connection.rollback()     # the ping's own transaction, so the request starts a fresh one
+        except Exception as exc:        # whatever the driver raises for a dead connection
+            raise DisconnectionError(f"pooled connection failed its ping: {exc}") from exc
+        finally:
+            record.info.pop("evalsuite_idle_since", None)
 
 
 def make_engine(url: str):
@@ -77,7 +109,8 @@ def make_engine(url: str):
                     timing.timed("lock", lock)       # the write queue (see the module's docstring)
             conn.exec_driver_sql("BEGIN" if readonly else "BEGIN IMMEDIATE")
     else:
-        engine = create_engine(url, pool_pre_ping=True, pool_size=5, max_overflow=10)
+        engine = create_engine(url, pool_size=5, max_overflow=10)
+        _ping_when_idle(engine)
         if engine.dialect.name == "postgresql":
             @event.listens_for(engine, "begin")
             def _pg_begin(conn):
