@@ -112,6 +112,8 @@ class Compositor:
                                       bg=background)
                 self.canvas[y:y + self.ch, x:x + panel_w] = strip
             self.slots.append((y + self.ch, x))
+        # one panel that fills the frame exactly (no caption, even size): compose hands it on as it is
+        self.whole_panel = self.slots == [(0, 0)] and (self.ph, self.pw) == self.canvas.shape[:2]
         for k in range(n, self.rows * self.cols):     # unused cells of a grid: plain background
             r, c = divmod(k, self.cols)
             self.canvas[r * cell_h:r * cell_h + cell_h - gap, c * cell_w:c * cell_w + panel_w] = background
@@ -119,7 +121,7 @@ class Compositor:
     def compose(self, panels) -> np.ndarray:
         """The composed frame (the same buffer every call, or the one panel when it fills the frame: write it
         out before the next)."""
-        if len(self.slots) == 1 and self.slots[0] == (0, 0) and np.shape(panels[0]) == self.canvas.shape:
+        if self.whole_panel:
             return panels[0]          # one panel, no caption: no copy (the encoder copies it once)
         for (y, x), p in zip(self.slots, panels):
             self.canvas[y:y + self.ph, x:x + self.pw] = p

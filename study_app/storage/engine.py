@@ -57,13 +57,9 @@ def _ping_when_idle(engine) -> None:
         if since is None or time.monotonic() - since <= PING_AFTER_IDLE_S:
             return                      # new, or back in the pool a moment ago
         try:
-            with dbapi_connection.cursor() as cur:
-                cur.execute("SELECT 1")
-            dbapi_connection.rollback()     # the ping's own transaction, so the request starts a fresh one
-        except Exception as exc:        # whatever the driver raises for a dead connection
+            engine.dialect.do_ping(dbapi_connection)      # the ping pool_pre_ping sends (no transaction left open)
+        except engine.dialect.loaded_dbapi.Error as exc:
             raise DisconnectionError(f"pooled connection failed its ping: {exc}") from exc
-        finally:
-            record.info.pop("evalsuite_idle_since", None)
 
 
 def make_engine(url: str):
