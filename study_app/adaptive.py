@@ -31,13 +31,11 @@ from __future__ import annotations
 
 import random
 from dataclasses import dataclass
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
-from scipy.stats import norm
 from sqlalchemy import func, select
-
-from evalsuite.analysis.ranking import bradley_terry
 
 __all__ = ["DEFAULT_EXPLORATION", "PRIOR", "Estimate", "Separation", "fit", "pair_gains", "choose_pair",
            "separation", "adaptive_options", "adaptive_record", "block_estimate", "assign_pair", "adaptive_status"]
@@ -82,6 +80,10 @@ def fit(conditions, outcomes, prior: float = PRIOR) -> Estimate:
             W[idx[a], idx[b]] += n * s
             W[idx[b], idx[a]] += n * (1 - s)
             votes += n
+    # imported here, not at the top: evalsuite.analysis pulls in pandas and the report's plotting, seconds of
+    # every gunicorn worker's start (and of its restart after a crash) that a study without adaptive pages never uses
+    from evalsuite.analysis.ranking import bradley_terry
+
     theta = np.asarray(bradley_terry(W, prior=0.0)) * np.log(10)
     p = 1 / (1 + np.exp(-(theta[:, None] - theta[None, :])))
     w = (W + W.T) * p * (1 - p)
@@ -115,7 +117,7 @@ def separation(est: Estimate, level: float = LEVEL) -> Separation:
     """Whether neighbours in the estimated order differ: ``|t_(k) - t_(k+1)| > z sd`` with ``z`` the
     ``(1 + level) / 2`` normal quantile and ``sd`` from the covariance of the difference."""
     order = np.argsort(-est.theta, kind="stable")
-    z = norm.ppf((1 + level) / 2)
+    z = NormalDist().inv_cdf((1 + level) / 2)
     sep = 0
     for i, j in zip(order[:-1], order[1:]):
         var = est.cov[i, i] + est.cov[j, j] - 2 * est.cov[i, j]

@@ -25,7 +25,6 @@ from collections import defaultdict
 from collections.abc import Hashable, Sequence
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 __all__ = ["order_rng", "latin_slot_orders", "balanced_sides", "PositionBalancer", "MAX_ASSIGNMENT"]
 
@@ -136,6 +135,8 @@ class PositionBalancer:
             rows = np.array([self.counts.get(it, np.zeros(k)) for it in items])       # (k, k)
             share = (rows.sum(axis=1, keepdims=True) + 1) / k
             cost = rows + 1000.0 * np.maximum(rows + 1 - share, 0) ** 3 + self.rng.random((k, k)) * 1e-3
+            from scipy.optimize import linear_sum_assignment  # here: 0.5 s of every app start otherwise
+
             pages, positions = linear_sum_assignment(cost)
             order = [0] * k
             for j, q in zip(pages, positions):

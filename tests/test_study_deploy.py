@@ -7,6 +7,7 @@ import os
 import re
 import socket
 import subprocess
+import sys
 import threading
 import time
 
@@ -259,3 +260,13 @@ def test_container_files_use_the_tested_nginx_site_and_gunicorn_settings():
     assert nginx["environment"]["EVALSUITE_APP"] == "app:8000" and "EVALSUITE_BIND=0.0.0.0:8000" in dockerfile
     unit = (root / "deploy" / "systemd" / "evalsuite-study.service").read_text()
     assert f"-c /opt/evalsuite/src/deploy/{GUNICORN_CONF.name}" in unit
+
+
+def test_a_gunicorn_worker_imports_the_app_without_the_analysis_stack():
+    # Every worker imports the app at its start and again after a crash: pandas, scipy.stats, matplotlib and
+    # evalsuite.analysis (seconds of CPU each time) are imported only where a study uses them.
+    code = ("import sys, study_app.app\n"
+            "print(' '.join(m for m in ('pandas', 'scipy.stats', 'scipy.optimize', 'matplotlib', 'torch',"
+            " 'evalsuite.analysis') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
