@@ -96,12 +96,12 @@ class Client:
         self.base, self.pid, self.rng, self.deadline, self.stats = base, pid, rng, deadline, stats
         self.think, self.arrive = think, arrive
         self.jar = http.cookiejar.CookieJar()
-        self.opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(self.jar),
-                                                  _NoRedirect())
         # A browser keeps its connection to the site open between requests (HTTP/1.1 keep-alive); without
         # keepalive every request opens a new connection (urllib's Connection: close), to compare.
         self.keepalive = keepalive
         self.conn = None
+        self.opener = None if keepalive else urllib.request.build_opener(
+            urllib.request.HTTPCookieProcessor(self.jar), _NoRedirect())
         self.acked = []        # (sid, page index, token, answer, status)
         self.sid = None
         self.retries = 0
